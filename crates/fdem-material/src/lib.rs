@@ -1,0 +1,53 @@
+//! Constitutive models of fdem, as pure functions on one material point.
+//!
+//! The material crate knows no mesh: the solver hands it a co-rotational
+//! stress `σ̂ = [xx, yy, zz, xy]` (Pa, tension positive), a co-rotational rate
+//! of deformation `D̂ = [xx, yy, xy]` (1/s, tensor shear) and a step `Δt` (s),
+//! and gets back the updated stress and state.
+//!
+//! * [`elastic`]: isotropic linear elasticity in plane strain (`ε_zz = 0`,
+//!   `σ_zz` tracked).
+
+pub mod elastic;
+
+pub use elastic::Elastic;
+
+/// Errors in material parameters, naming the offending parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParameterError {
+    /// The parameter's name as the Python API spells it (`E`, `nu`, `rho`…).
+    pub parameter: &'static str,
+    /// The rejected value.
+    pub value: f64,
+    /// What the value must satisfy.
+    pub requirement: String,
+}
+
+impl std::fmt::Display for ParameterError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "material parameter {} = {} is invalid: {}",
+            self.parameter, self.value, self.requirement
+        )
+    }
+}
+
+impl std::error::Error for ParameterError {}
+
+pub(crate) fn check(
+    parameter: &'static str,
+    value: f64,
+    ok: bool,
+    requirement: &str,
+) -> Result<(), ParameterError> {
+    if ok && value.is_finite() {
+        Ok(())
+    } else {
+        Err(ParameterError {
+            parameter,
+            value,
+            requirement: requirement.to_string(),
+        })
+    }
+}

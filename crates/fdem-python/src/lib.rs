@@ -1,0 +1,534 @@
+//! `fdem._core`: the native module behind the `fdem` Python package.
+//!
+//! This crate only converts: numpy arrays in, numpy copies out, Rust errors
+//! into Python exceptions. It holds no physics. Every entry point runs inside
+//! [`guard`], so a Rust panic surfaces as a `RuntimeError` (and poisons the
+//! simulation) instead of crossing into Python as a `PanicException`.
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::time::{Duration, Instant};
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use fdem_solver::{
+    Amplitude, Constraint, MaterialSpec, ModelSpec, PressureLoad, RunError, Settings,
+};
+
+/// Runs `f`, turning a panic into a `RuntimeError`.
+fn guard<T>(f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(r) => r,
+        Err(payload) => {
+            let msg = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            Err(PyRuntimeError::new_err(format!(
+                "internal error in the fdem kernel: {msg} (please report this)"
+            )))
+        }
+    }
+}
+
+fn value_error(msg: impl Into<String>) -> PyErr {
+    PyValueError::new_err(msg.into())
+}
+
+/// Rows of a 2D float array with `cols` columns, as fixed-size arrays.
+fn rows<const N: usize>(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f64; N]>> {
+    let v = a.as_array();
+    if v.ncols() != N {
+        return Err(value_error(format!(
+            "{name} must have shape (n, {N}), got {:?}",
+            v.shape()
+        )));
+    }
+    Ok(v.rows()
+        .into_iter()
+        .map(|r| std::array::from_fn(|k| r[k]))
+        .collect())
+}
+
+fn int_rows<const N: usize>(name: &str, a: &PyReadonlyArray2<'_, i64>) -> PyResult<Vec<[i64; N]>> {
+    let v = a.as_array();
+    if v.ncols() != N {
+        return Err(value_error(format!(
+            "{name} must have shape (n, {N}), got {:?}",
+            v.shape()
+        )));
+    }
+    Ok(v.rows()
+        .into_iter()
+        .map(|r| std::array::from_fn(|k| r[k]))
+        .collect())
+}
+
+fn to_u32(name: &str, i: usize, x: i64) -> PyResult<u32> {
+    u32::try_from(x).map_err(|_| value_error(format!("{name}[{i}] = {x} is not a valid id")))
+}
+
+fn amp_index(name: &str, i: usize, x: i64) -> PyResult<Option<u32>> {
+    if x < 0 {
+        Ok(None)
+    } else {
+        to_u32(name, i, x).map(Some)
+    }
+}
+
+fn vec2_array<'py>(py: Python<'py>, v: &[[f64; 2]]) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = v.iter().flatten().copied().collect();
+    Array2::from_shape_vec((v.len(), 2), flat)
+        .expect("shape")
+        .into_pyarray(py)
+}
+
+fn vec4_array<'py>(py: Python<'py>, v: &[[f64; 4]]) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = v.iter().flatten().copied().collect();
+    Array2::from_shape_vec((v.len(), 4), flat)
+        .expect("shape")
+        .into_pyarray(py)
+}
+
+/// Converts a run error into the matching `fdem.errors` exception.
+fn run_error(py: Python<'_>, e: RunError) -> PyErr {
+    let msg = e.to_string();
+    let made = (|| -> PyResult<PyErr> {
+        let errors = py.import("fdem.errors")?;
+        let exc = match e {
+            RunError::InvertedElement {
+                element,
+                step,
+                time,
+            } => {
+                errors
+                    .getattr("InvertedElementError")?
+                    .call1((msg.clone(), element, step, time))?
+            }
+            RunError::NonFinite {
+                node,
+                quantity,
+                step,
+                time,
+            } => errors.getattr("NonFiniteError")?.call1((
+                msg.clone(),
+                node,
+                quantity,
+                step,
+                time,
+            ))?,
+        };
+        Ok(PyErr::from_value(exc))
+    })();
+    made.unwrap_or_else(|_| PyRuntimeError::new_err(msg))
+}
+
+/// An explicit FDEM simulation held in Rust. Built by `fdem.Simulation`
+/// from a `fdem.Model`; see that class for the user-facing API.
+#[pyclass(module = "fdem._core", name = "Simulation")]
+struct PySimulation {
+    sim: fdem_solver::Simulation,
+    /// Set when a panic left the state undefined.
+    poisoned: bool,
+}
+
+impl PySimulation {
+    fn ok(&self) -> PyResult<()> {
+        if self.poisoned {
+            Err(PyRuntimeError::new_err(
+                "this simulation was stopped by an internal error and cannot continue",
+            ))
+        } else {
+            Ok(())
+        }
+    }
+}
+
+#[pymethods]
+impl PySimulation {
+    /// Builds the kernel state. Arrays must be C-ordered or not, of the
+    /// documented dtypes (the Python wrapper converts); every problem raises
+    /// `ValueError` naming the node, element, parameter or entry.
+    #[new]
+    #[pyo3(signature = (
+        points, triangles, materials, element_material, *,
+        may_coincide=None, gravity=(0.0, 0.0),
+        constraint_nodes=None, constraint_fixed=None, constraint_values=None, constraint_amplitude=None,
+        pressure_facets=None, pressure_values=None, pressure_amplitude=None,
+        amplitudes=Vec::new(), initial_velocity=None, initial_stress=None,
+        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, threads=0
+    ))]
+    fn new(
+        points: PyReadonlyArray2<'_, f64>,
+        triangles: PyReadonlyArray2<'_, i64>,
+        materials: PyReadonlyArray2<'_, f64>,
+        element_material: PyReadonlyArray1<'_, i64>,
+        may_coincide: Option<PyReadonlyArray1<'_, bool>>,
+        gravity: (f64, f64),
+        constraint_nodes: Option<PyReadonlyArray1<'_, i64>>,
+        constraint_fixed: Option<PyReadonlyArray2<'_, bool>>,
+        constraint_values: Option<PyReadonlyArray2<'_, f64>>,
+        constraint_amplitude: Option<PyReadonlyArray1<'_, i64>>,
+        pressure_facets: Option<PyReadonlyArray2<'_, i64>>,
+        pressure_values: Option<PyReadonlyArray1<'_, f64>>,
+        pressure_amplitude: Option<PyReadonlyArray1<'_, i64>>,
+        amplitudes: Vec<(Vec<f64>, Vec<f64>)>,
+        initial_velocity: Option<PyReadonlyArray2<'_, f64>>,
+        initial_stress: Option<PyReadonlyArray2<'_, f64>>,
+        mass_damping: f64,
+        stiffness_damping: f64,
+        safety: f64,
+        fixed_dt: Option<f64>,
+        dt_interval: u32,
+        threads: usize,
+    ) -> PyResult<Self> {
+        guard(|| {
+            let points = rows::<2>("points", &points)?;
+            let triangles: Vec<[u64; 3]> = int_rows::<3>("triangles", &triangles)?
+                .into_iter()
+                .enumerate()
+                .map(|(e, t)| {
+                    if let Some(v) = t.iter().find(|&&v| v < 0) {
+                        Err(value_error(format!(
+                            "element {e} refers to node {v}; node ids must be >= 0"
+                        )))
+                    } else {
+                        Ok(t.map(|v| v as u64))
+                    }
+                })
+                .collect::<PyResult<_>>()?;
+            let materials = rows::<3>("materials", &materials)?
+                .into_iter()
+                .map(|[density, young, poisson]| MaterialSpec {
+                    density,
+                    young,
+                    poisson,
+                })
+                .collect();
+            let element_material = element_material
+                .as_array()
+                .iter()
+                .enumerate()
+                .map(|(i, &k)| to_u32("element_material", i, k))
+                .collect::<PyResult<_>>()?;
+            let may_coincide = may_coincide
+                .map(|a| a.as_array().to_vec())
+                .unwrap_or_default();
+
+            let mut constraints = Vec::new();
+            if let Some(nodes) = constraint_nodes {
+                let nodes = nodes.as_array();
+                let c = nodes.len();
+                let fixed =
+                    constraint_fixed.ok_or_else(|| value_error("constraint_fixed is required"))?;
+                let fixed = fixed.as_array();
+                let values = constraint_values
+                    .ok_or_else(|| value_error("constraint_values is required"))?;
+                let values = rows::<2>("constraint_values", &values)?;
+                let amp = constraint_amplitude
+                    .ok_or_else(|| value_error("constraint_amplitude is required"))?;
+                let amp = amp.as_array();
+                if fixed.shape() != [c, 2] || values.len() != c || amp.len() != c {
+                    return Err(value_error("constraint arrays must have matching lengths"));
+                }
+                for i in 0..c {
+                    constraints.push(Constraint {
+                        node: to_u32("constraint_nodes", i, nodes[i])?,
+                        fixed: [fixed[[i, 0]], fixed[[i, 1]]],
+                        value: values[i],
+                        amplitude: amp_index("constraint_amplitude", i, amp[i])?,
+                    });
+                }
+            }
+            let mut pressures = Vec::new();
+            if let Some(f) = pressure_facets {
+                let f = int_rows::<2>("pressure_facets", &f)?;
+                let p =
+                    pressure_values.ok_or_else(|| value_error("pressure_values is required"))?;
+                let p = p.as_array();
+                let amp = pressure_amplitude
+                    .ok_or_else(|| value_error("pressure_amplitude is required"))?;
+                let amp = amp.as_array();
+                if p.len() != f.len() || amp.len() != f.len() {
+                    return Err(value_error("pressure arrays must have matching lengths"));
+                }
+                for i in 0..f.len() {
+                    pressures.push(PressureLoad {
+                        nodes: [
+                            to_u32("pressure_facets", i, f[i][0])?,
+                            to_u32("pressure_facets", i, f[i][1])?,
+                        ],
+                        pressure: p[i],
+                        amplitude: amp_index("pressure_amplitude", i, amp[i])?,
+                    });
+                }
+            }
+            let spec = ModelSpec {
+                points,
+                triangles,
+                may_coincide,
+                materials,
+                element_material,
+                gravity: [gravity.0, gravity.1],
+                constraints,
+                pressures,
+                amplitudes: amplitudes
+                    .into_iter()
+                    .map(|(times, values)| Amplitude { times, values })
+                    .collect(),
+                initial_velocity: initial_velocity
+                    .map(|a| rows::<2>("initial_velocity", &a))
+                    .transpose()?,
+                initial_stress: initial_stress
+                    .map(|a| rows::<4>("initial_stress", &a))
+                    .transpose()?,
+                settings: Settings {
+                    mass_damping,
+                    stiffness_damping,
+                    safety,
+                    fixed_dt,
+                    dt_interval,
+                },
+            };
+            let sim = fdem_solver::Simulation::new(spec, threads)
+                .map_err(|e| value_error(e.to_string()))?;
+            Ok(PySimulation {
+                sim,
+                poisoned: false,
+            })
+        })
+    }
+
+    /// Advances until `time >= until` or `max_steps` steps, with the GIL
+    /// released; checks for Ctrl-C about every 50 ms (at a step boundary).
+    /// Returns the number of steps taken.
+    #[pyo3(signature = (until, max_steps=u64::MAX))]
+    fn advance(&mut self, py: Python<'_>, until: f64, max_steps: u64) -> PyResult<u64> {
+        self.ok()?;
+        let mut taken = 0u64;
+        let mut chunk = 1u64;
+        while self.sim.time() < until && taken < max_steps {
+            let n = chunk.min(max_steps - taken);
+            let sim = &mut self.sim;
+            let start = Instant::now();
+            let result = py.detach(|| catch_unwind(AssertUnwindSafe(|| sim.advance(until, n))));
+            let elapsed = start.elapsed();
+            match result {
+                Ok(Ok(k)) => taken += k,
+                Ok(Err(e)) => return Err(run_error(py, e)),
+                Err(_) => {
+                    self.poisoned = true;
+                    return Err(PyRuntimeError::new_err(
+                        "internal error in the fdem kernel during a step (please report this)",
+                    ));
+                }
+            }
+            py.check_signals()?;
+            // aim for about 50 ms between signal checks
+            if elapsed < Duration::from_millis(25) {
+                chunk = (chunk * 2).min(1 << 20);
+            } else if elapsed > Duration::from_millis(100) && chunk > 1 {
+                chunk /= 2;
+            }
+        }
+        Ok(taken)
+    }
+
+    /// Advances exactly `steps` steps (GIL released).
+    fn step(&mut self, py: Python<'_>, steps: u64) -> PyResult<()> {
+        self.ok()?;
+        let start = self.sim.steps();
+        self.advance(py, f64::INFINITY, steps)?;
+        debug_assert_eq!(self.sim.steps(), start + steps);
+        Ok(())
+    }
+
+    /// Replaces the run settings between stages.
+    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval))]
+    fn set_settings(
+        &mut self,
+        mass_damping: f64,
+        stiffness_damping: f64,
+        safety: f64,
+        fixed_dt: Option<f64>,
+        dt_interval: u32,
+    ) -> PyResult<()> {
+        guard(|| {
+            self.ok()?;
+            let s = Settings {
+                mass_damping,
+                stiffness_damping,
+                safety,
+                fixed_dt,
+                dt_interval,
+            };
+            self.sim
+                .set_settings(s)
+                .map_err(|e| value_error(e.to_string()))
+        })
+    }
+
+    /// Changes the values of existing prescribed velocities (m/s).
+    fn set_prescribed_velocity(
+        &mut self,
+        nodes: PyReadonlyArray1<'_, i64>,
+        values: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<()> {
+        guard(|| {
+            self.ok()?;
+            let values = rows::<2>("values", &values)?;
+            let nodes: Vec<u32> = nodes
+                .as_array()
+                .iter()
+                .enumerate()
+                .map(|(i, &n)| to_u32("nodes", i, n))
+                .collect::<PyResult<_>>()?;
+            if nodes.len() != values.len() {
+                return Err(value_error("nodes and values must have the same length"));
+            }
+            self.sim
+                .set_prescribed_velocity(&nodes, &values)
+                .map_err(|e| value_error(e.to_string()))
+        })
+    }
+
+    /// Simulated time (s).
+    #[getter]
+    fn time(&self) -> f64 {
+        self.sim.time()
+    }
+
+    /// Steps taken.
+    #[getter]
+    fn steps(&self) -> u64 {
+        self.sim.steps()
+    }
+
+    /// The step size in use (s).
+    #[getter]
+    fn time_step(&self) -> f64 {
+        self.sim.time_step()
+    }
+
+    /// The mesh's critical step `min_e 2/ω_e` before the safety factor (s).
+    #[getter]
+    fn critical_time_step(&self) -> f64 {
+        self.sim.critical_time_step()
+    }
+
+    /// Worker threads.
+    #[getter]
+    fn threads(&self) -> usize {
+        self.sim.threads()
+    }
+
+    /// Number of nodes.
+    #[getter]
+    fn n_nodes(&self) -> usize {
+        self.sim.n_nodes()
+    }
+
+    /// Number of elements.
+    #[getter]
+    fn n_elements(&self) -> usize {
+        self.sim.n_elements()
+    }
+
+    /// Current node coordinates, shape (n_nodes, 2), a copy (m).
+    fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        vec2_array(py, self.sim.positions())
+    }
+
+    /// Reference node coordinates, shape (n_nodes, 2), a copy (m).
+    fn reference_positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        vec2_array(py, self.sim.reference_positions())
+    }
+
+    /// Whole-step velocities, shape (n_nodes, 2), a copy (m/s).
+    fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        guard(|| Ok(vec2_array(py, &self.sim.velocities())))
+    }
+
+    /// Cauchy stress per element `[xx, yy, zz, xy]`, shape (n_elements, 4) (Pa).
+    fn stress<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        guard(|| Ok(vec4_array(py, &self.sim.stress())))
+    }
+
+    /// Connectivity, shape (n_elements, 3), int64, a copy.
+    fn triangles<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
+        let t = self.sim.triangles();
+        let flat: Vec<i64> = t.iter().flatten().map(|&v| v as i64).collect();
+        Array2::from_shape_vec((t.len(), 3), flat)
+            .expect("shape")
+            .into_pyarray(py)
+    }
+
+    /// Lumped nodal masses (kg per unit thickness), a copy.
+    fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.sim.masses().to_vec().into_pyarray(py)
+    }
+
+    /// Current element areas (m²).
+    fn areas<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.sim.areas().into_pyarray(py)
+    }
+
+    /// Whether each element is active.
+    fn active<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        self.sim.active().to_vec().into_pyarray(py)
+    }
+
+    /// The energy account (J per unit thickness) as a dict.
+    fn energies<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        guard(|| {
+            let e = self.sim.energies();
+            let d = PyDict::new(py);
+            d.set_item("kinetic", e.kinetic)?;
+            d.set_item("elastic", e.elastic)?;
+            d.set_item("kinetic_initial", e.kinetic_initial)?;
+            d.set_item("elastic_initial", e.elastic_initial)?;
+            d.set_item("external_work", e.external_work)?;
+            d.set_item("support_work", e.support_work)?;
+            d.set_item("mass_damping", e.mass_damping)?;
+            d.set_item("viscous_damping", e.viscous_damping)?;
+            d.set_item("plastic", e.plastic)?;
+            d.set_item("fracture", e.fracture)?;
+            d.set_item("internal_work", e.internal_work)?;
+            d.set_item("residual", e.residual())?;
+            Ok(d)
+        })
+    }
+}
+
+/// Checks a mesh (`fdem_mesh::validate`): raises `ValueError` naming the
+/// first offending node or element.
+#[pyfunction]
+fn validate_mesh(
+    points: PyReadonlyArray2<'_, f64>,
+    triangles: PyReadonlyArray2<'_, i64>,
+    may_coincide: PyReadonlyArray1<'_, bool>,
+) -> PyResult<()> {
+    guard(|| {
+        let points = rows::<2>("points", &points)?;
+        let triangles: Vec<[u64; 3]> = int_rows::<3>("triangles", &triangles)?
+            .into_iter()
+            .map(|t| t.map(|v| v.max(0) as u64))
+            .collect();
+        let may = may_coincide.as_array().to_vec();
+        fdem_solver::validate_mesh(&points, &triangles, &may)
+            .map_err(|e| value_error(e.to_string()))
+    })
+}
+
+/// The native module.
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PySimulation>()?;
+    m.add_function(wrap_pyfunction!(validate_mesh, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,90 @@
+//! Errors of model set-up and of a run, each naming the offending entity.
+
+use fdem_material::ParameterError;
+use fdem_mesh::MeshError;
+
+/// A model that cannot be simulated.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SetupError {
+    /// The mesh failed validation.
+    Mesh(MeshError),
+    /// Material `index` has an invalid parameter.
+    Material {
+        /// Position in the material table.
+        index: usize,
+        /// The parameter problem.
+        error: ParameterError,
+    },
+    /// Any other inconsistency (array length, id range, facet not on the
+    /// boundary…), as a sentence naming the entity.
+    Invalid(String),
+}
+
+impl std::fmt::Display for SetupError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SetupError::Mesh(e) => write!(f, "{e}"),
+            SetupError::Material { index, error } => write!(f, "material {index}: {error}"),
+            SetupError::Invalid(s) => f.write_str(s),
+        }
+    }
+}
+
+impl std::error::Error for SetupError {}
+
+impl From<MeshError> for SetupError {
+    fn from(e: MeshError) -> Self {
+        SetupError::Mesh(e)
+    }
+}
+
+/// A run that had to stop. The state is that of the failed step.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RunError {
+    /// An element's area became zero or negative (or not finite).
+    InvertedElement {
+        /// The element (smallest id, if several).
+        element: u32,
+        /// The step that produced it.
+        step: u64,
+        /// Simulated time at the end of that step (s).
+        time: f64,
+    },
+    /// A nodal quantity became NaN or infinite.
+    NonFinite {
+        /// The node (smallest id, if several).
+        node: u32,
+        /// Which quantity (`velocity`, `position`).
+        quantity: &'static str,
+        /// The step.
+        step: u64,
+        /// Simulated time (s).
+        time: f64,
+    },
+}
+
+impl std::fmt::Display for RunError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RunError::InvertedElement {
+                element,
+                step,
+                time,
+            } => write!(
+                f,
+                "element {element} inverted (area <= 0) at step {step}, time {time:.6e} s; \
+                 reduce the time-step safety factor or the load rate, or check the supports"
+            ),
+            RunError::NonFinite {
+                node,
+                quantity,
+                step,
+                time,
+            } => {
+                write!(f, "{quantity} of node {node} became NaN or infinite at step {step}, time {time:.6e} s")
+            }
+        }
+    }
+}
+
+impl std::error::Error for RunError {}

@@ -1,0 +1,71 @@
+//! The description of a model as the solver receives it.
+
+use crate::loads::{Amplitude, Constraint, PressureLoad};
+
+/// A material as given by the user: density and elastic constants.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialSpec {
+    /// Density `ρ` (kg/m³).
+    pub density: f64,
+    /// Young's modulus `E` (Pa).
+    pub young: f64,
+    /// Poisson's ratio `ν` (−).
+    pub poisson: f64,
+}
+
+/// Run settings that may change between stages.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// Mass-proportional damping `α` (1/s).
+    pub mass_damping: f64,
+    /// Stiffness-proportional (element viscous) damping `β` (s).
+    pub stiffness_damping: f64,
+    /// Safety factor `s` on the critical step, `0 < s ≤ 1`.
+    pub safety: f64,
+    /// A fixed step (s) instead of the automatic one, if set.
+    pub fixed_dt: Option<f64>,
+    /// Steps between re-evaluations of the automatic stable step.
+    pub dt_interval: u32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            mass_damping: 0.0,
+            stiffness_damping: 0.0,
+            safety: 0.8,
+            fixed_dt: None,
+            dt_interval: 100,
+        }
+    }
+}
+
+/// Everything needed to start a simulation.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ModelSpec {
+    /// Node reference coordinates (m).
+    pub points: Vec<[f64; 2]>,
+    /// Triangles, counter-clockwise node ids (u64 so that out-of-range ids
+    /// from the caller are reported, not truncated).
+    pub triangles: Vec<[u64; 3]>,
+    /// Nodes allowed to coincide with another (both sides of an interface).
+    pub may_coincide: Vec<bool>,
+    /// Material table.
+    pub materials: Vec<MaterialSpec>,
+    /// Material index of each element.
+    pub element_material: Vec<u32>,
+    /// Gravitational acceleration (m/s²).
+    pub gravity: [f64; 2],
+    /// Supports and prescribed velocities.
+    pub constraints: Vec<Constraint>,
+    /// Surface pressures.
+    pub pressures: Vec<PressureLoad>,
+    /// Time histories referred to by constraints and pressures.
+    pub amplitudes: Vec<Amplitude>,
+    /// Initial nodal velocities (m/s), if any.
+    pub initial_velocity: Option<Vec<[f64; 2]>>,
+    /// Initial element stresses `[xx, yy, zz, xy]` (Pa), if any.
+    pub initial_stress: Option<Vec<[f64; 4]>>,
+    /// Run settings.
+    pub settings: Settings,
+}

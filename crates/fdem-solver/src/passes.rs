@@ -1,0 +1,264 @@
+//! The parallel passes of one step. Each works on fixed chunks of
+//! [`CHUNK`](crate::CHUNK) entities and writes one partial per chunk.
+
+use fdem_element::corotational::corotational_frame;
+use fdem_element::kinematics::ReferenceShape;
+use fdem_element::stability::critical_time_step;
+use fdem_element::tensor::rotate;
+use fdem_element::{internal_forces, Vec2};
+use fdem_material::Elastic;
+use fdem_mesh::Csr;
+use rayon::prelude::*;
+
+use crate::energy::{ElementPartial, NodePartial};
+use crate::loads::Constraint;
+use crate::CHUNK;
+
+/// Marks a node without constraint in `Nodes::bc`.
+pub(crate) const NO_BC: u32 = u32::MAX;
+
+/// A material as the element pass uses it.
+#[derive(Clone, Debug)]
+pub(crate) struct Material {
+    pub density: f64,
+    pub elastic: Elastic,
+}
+
+/// Read-only inputs of the node pass.
+pub(crate) struct NodeInputs<'a> {
+    pub mass: &'a [f64],
+    pub aux: &'a [Vec2],
+    pub bc: &'a [u32],
+    pub node_elems: &'a Csr,
+    pub elem_force: &'a [Vec2],
+    pub constraints: &'a [Constraint],
+    pub amplitude_values: &'a [f64],
+    pub gravity: Vec2,
+    pub alpha: f64,
+    /// Step of the velocity update, `(Δt^{n−½} + Δt^{n+½}) / 2` (s).
+    pub dt_avg: f64,
+    /// Step of the position update, `Δt^{n+½}` (s).
+    pub dt: f64,
+    /// Previous position step `Δt^{n−½}` (s).
+    pub dt_prev: f64,
+}
+
+/// Node pass: `v^{n+½}` and `x^{n+1}` from the forces at `xⁿ`.
+///
+/// Modified central difference with mass damping α (DESIGN §4.2):
+/// `v^{n+½} = [(1 − αΔt/2) v^{n−½} + Δt f/m] / (1 + αΔt/2)`.
+pub(crate) fn node_pass(
+    inp: &NodeInputs<'_>,
+    x: &mut [Vec2],
+    v: &mut [Vec2],
+    partials: &mut [NodePartial],
+) {
+    let a = 0.5 * inp.alpha * inp.dt_avg;
+    let (keep, scale) = (1.0 - a, 1.0 / (1.0 + a));
+    x.par_chunks_mut(CHUNK)
+        .zip(v.par_chunks_mut(CHUNK))
+        .zip(partials.par_iter_mut())
+        .enumerate()
+        .for_each(|(c, ((xc, vc), part))| {
+            let mut acc = NodePartial::default();
+            let base = c * CHUNK;
+            for j in 0..xc.len() {
+                let i = base + j;
+                let m = inp.mass[i];
+                if m <= 0.0 {
+                    continue;
+                }
+                let f_ext = [
+                    m * inp.gravity[0] + inp.aux[i][0],
+                    m * inp.gravity[1] + inp.aux[i][1],
+                ];
+                let mut f = f_ext;
+                for &item in inp.node_elems.row(i) {
+                    let fe = inp.elem_force[item as usize];
+                    f[0] -= fe[0];
+                    f[1] -= fe[1];
+                }
+                let v_old = vc[j];
+                let r = inp.dt_avg / m;
+                let mut v_new = [
+                    (keep * v_old[0] + r * f[0]) * scale,
+                    (keep * v_old[1] + r * f[1]) * scale,
+                ];
+                let b = inp.bc[i];
+                let dxc = |vn: Vec2| {
+                    [
+                        0.5 * (inp.dt * vn[0] + inp.dt_prev * v_old[0]),
+                        0.5 * (inp.dt * vn[1] + inp.dt_prev * v_old[1]),
+                    ]
+                };
+                if b != NO_BC {
+                    let con = &inp.constraints[b as usize];
+                    let amp = con
+                        .amplitude
+                        .map_or(1.0, |k| inp.amplitude_values[k as usize]);
+                    for d in 0..2 {
+                        if con.fixed[d] {
+                            v_new[d] = con.value[d] * amp;
+                        }
+                    }
+                    // reaction R = m a + damping force − f on the held components
+                    let dx = dxc(v_new);
+                    for d in 0..2 {
+                        if con.fixed[d] {
+                            let damp = inp.alpha * m * 0.5 * (v_old[d] + v_new[d]);
+                            let reaction = m * (v_new[d] - v_old[d]) / inp.dt_avg + damp - f[d];
+                            acc.support += reaction * dx[d];
+                        }
+                    }
+                }
+                let dx = dxc(v_new);
+                acc.external += f_ext[0] * dx[0] + f_ext[1] * dx[1];
+                if inp.alpha > 0.0 {
+                    let vm = [0.5 * (v_old[0] + v_new[0]), 0.5 * (v_old[1] + v_new[1])];
+                    acc.damping += inp.alpha * m * (vm[0] * dx[0] + vm[1] * dx[1]);
+                }
+                let p = &mut xc[j];
+                p[0] += inp.dt * v_new[0];
+                p[1] += inp.dt * v_new[1];
+                vc[j] = v_new;
+                if acc.bad_node.is_none() {
+                    if !(v_new[0].is_finite() && v_new[1].is_finite()) {
+                        acc.bad_node = Some((i as u32, "velocity"));
+                    } else if !(p[0].is_finite() && p[1].is_finite()) {
+                        acc.bad_node = Some((i as u32, "position"));
+                    }
+                }
+            }
+            *part = acc;
+        });
+}
+
+/// Read-only inputs of the element pass.
+pub(crate) struct ElementInputs<'a> {
+    pub x: &'a [Vec2],
+    pub v: &'a [Vec2],
+    pub conn: &'a [[u32; 3]],
+    pub reference: &'a [ReferenceShape],
+    pub material: &'a [u32],
+    pub active: &'a [bool],
+    pub materials: &'a [Material],
+    pub beta: f64,
+    /// The step just taken, `Δt^{n+½}` (s); zero to only recompute forces.
+    pub dt: f64,
+}
+
+#[inline(always)]
+fn gather<T: Copy>(a: &[T], t: [u32; 3]) -> [T; 3] {
+    [a[t[0] as usize], a[t[1] as usize], a[t[2] as usize]]
+}
+
+/// Element pass: stress update to `σ̂^{n+1}` and internal forces at `x^{n+1}`.
+///
+/// `force` holds three nodal forces per element (`3e + k`), so that a
+/// node→element CSR item indexes it directly.
+pub(crate) fn element_pass(
+    inp: &ElementInputs<'_>,
+    stress: &mut [[f64; 4]],
+    force: &mut [Vec2],
+    partials: &mut [ElementPartial],
+) {
+    stress
+        .par_chunks_mut(CHUNK)
+        .zip(force.par_chunks_mut(3 * CHUNK))
+        .zip(partials.par_iter_mut())
+        .enumerate()
+        .for_each(|(c, ((sc, fc), part))| {
+            let mut acc = ElementPartial::default();
+            let base = c * CHUNK;
+            for j in 0..sc.len() {
+                let e = base + j;
+                let f_out = &mut fc[3 * j..3 * j + 3];
+                if !inp.active[e] {
+                    continue;
+                }
+                let t = inp.conn[e];
+                let x = gather(inp.x, t);
+                let v = gather(inp.v, t);
+                let frame = corotational_frame(&inp.reference[e], &x, &v, inp.dt);
+                if frame.is_inverted() {
+                    acc.bad_element.get_or_insert(e as u32);
+                    f_out.copy_from_slice(&[[0.0; 2]; 3]);
+                    continue;
+                }
+                let mat = &inp.materials[inp.material[e] as usize];
+                let old = sc[j];
+                let new = mat.elastic.trial(old, frame.d_hat, inp.dt);
+                sc[j] = new;
+                let dh = frame.d_hat;
+                let power = 0.5
+                    * ((old[0] + new[0]) * dh[0]
+                        + (old[1] + new[1]) * dh[1]
+                        + 2.0 * (old[3] + new[3]) * dh[2]);
+                acc.internal += 0.5 * frame.twice_area_mid * inp.dt * power;
+                let mut sigma = rotate(new, frame.cos_new, frame.sin_new);
+                if inp.beta > 0.0 {
+                    let sv = mat.elastic.viscous(frame.d, inp.beta);
+                    let d = frame.d;
+                    acc.viscous += 0.5
+                        * frame.twice_area_mid
+                        * inp.dt
+                        * (sv[0] * d[0] + sv[1] * d[1] + 2.0 * sv[3] * d[2]);
+                    for k in 0..4 {
+                        sigma[k] += sv[k];
+                    }
+                }
+                f_out.copy_from_slice(&internal_forces(&x, &sigma));
+            }
+            *part = acc;
+        });
+}
+
+/// Follower pressure forces on the current configuration into `aux`
+/// (sequential: the loaded facets are few and the order stays fixed).
+/// `facets` are oriented with the body on their left.
+pub(crate) fn pressure_forces(
+    x: &[Vec2],
+    facets: &[([u32; 2], f64, Option<u32>)],
+    amplitude_values: &[f64],
+    touched: &[u32],
+    aux: &mut [Vec2],
+) {
+    for &n in touched {
+        aux[n as usize] = [0.0; 2];
+    }
+    for &([a, b], p, amp) in facets {
+        let p = p * amp.map_or(1.0, |k| amplitude_values[k as usize]);
+        let (xa, xb) = (x[a as usize], x[b as usize]);
+        // outward normal × length = (dy, −dx); the force pushes inward
+        let f = [-0.5 * p * (xb[1] - xa[1]), 0.5 * p * (xb[0] - xa[0])];
+        for n in [a, b] {
+            aux[n as usize][0] += f[0];
+            aux[n as usize][1] += f[1];
+        }
+    }
+}
+
+/// Smallest critical step over the active elements (s), at the current
+/// configuration, before the safety factor. `min` is exact and
+/// order-independent, so the result does not depend on the thread count.
+pub(crate) fn stable_time_step(inp: &ElementInputs<'_>) -> f64 {
+    (0..inp.conn.len())
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .filter(|&e| inp.active[e])
+        .map(|e| {
+            let mat = &inp.materials[inp.material[e] as usize];
+            let x = gather(inp.x, inp.conn[e]);
+            critical_time_step(
+                &x,
+                mat.elastic.lambda,
+                mat.elastic.mu,
+                mat.density,
+                inp.beta,
+            )
+        })
+        .reduce(
+            || f64::INFINITY,
+            |a, b| if b < a || a.is_nan() { b } else { a },
+        )
+}

@@ -1,0 +1,434 @@
+"""Triangle meshes with named node, facet and element groups.
+
+A :class:`Mesh` is an immutable value: reference coordinates (m), counter-
+clockwise triangles, and named groups. Build one from numpy arrays, with
+:meth:`Mesh.rectangle` (structured, no dependencies), with
+:func:`gmsh_rectangle` (unstructured, needs the ``gmsh`` extra), or read any
+triangle mesh meshio understands (gmsh ``.msh``, ``.vtu``…) with
+:meth:`Mesh.read`.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from . import _core
+from ._checks import float_array, index_array, positive
+
+__all__ = ["Mesh", "gmsh_rectangle"]
+
+
+def _frozen(a: NDArray[Any]) -> NDArray[Any]:
+    a = np.array(a, copy=True)
+    a.setflags(write=False)
+    return a
+
+
+class Mesh:
+    """A 2D mesh of linear triangles with named groups.
+
+    Parameters
+    ----------
+    points : array_like, shape (n_nodes, 2)
+        Reference coordinates (m).
+    triangles : array_like of int, shape (n_elements, 3)
+        Node ids of each triangle, counter-clockwise.
+    node_sets : mapping of str to array_like of int, optional
+        Named groups of nodes (supports, probes).
+    facet_sets : mapping of str to array_like of int, shape (k, 2), optional
+        Named groups of boundary edges as node pairs (pressure, supports).
+    element_sets : mapping of str to array_like of int, optional
+        Named groups of elements (materials, excavation stages).
+    interface_nodes : array_like of bool, shape (n_nodes,), optional
+        Nodes allowed to coincide with another node (the two sides of a
+        joint or crack). Coincident nodes not marked here are an error.
+
+    Raises
+    ------
+    ValueError
+        For wrong shapes or dtypes, NaN or infinite coordinates, clockwise or
+        zero-area triangles, coincident or orphan nodes, duplicate or
+        overlapping triangles, and group entries out of range; the message
+        names the node, element or group.
+    """
+
+    def __init__(
+        self,
+        points: Any,
+        triangles: Any,
+        *,
+        node_sets: Mapping[str, Any] | None = None,
+        facet_sets: Mapping[str, Any] | None = None,
+        element_sets: Mapping[str, Any] | None = None,
+        interface_nodes: Any = None,
+    ) -> None:
+        pts = float_array("points", points, (None, 2))
+        tri = index_array("triangles", triangles, (None, 3))
+        if len(tri) == 0:
+            raise ValueError("triangles: the mesh has no elements")
+        n = len(pts)
+        if interface_nodes is None:
+            iface = np.zeros(n, dtype=bool)
+        else:
+            iface = np.asarray(interface_nodes)
+            if iface.dtype != bool or iface.shape != (n,):
+                raise ValueError(f"interface_nodes: expected a bool array of shape ({n},), got {iface.dtype} {iface.shape}")
+        _core.validate_mesh(pts, tri, np.ascontiguousarray(iface))
+        self._points = _frozen(pts)
+        self._triangles = _frozen(tri)
+        self._interface = _frozen(iface)
+        self._node_sets = MappingProxyType(
+            {str(k): _frozen(index_array(f"node set '{k}'", v, (None,), n)) for k, v in (node_sets or {}).items()}
+        )
+        self._element_sets = MappingProxyType(
+            {
+                str(k): _frozen(index_array(f"element set '{k}'", v, (None,), len(tri)))
+                for k, v in (element_sets or {}).items()
+            }
+        )
+        boundary = {tuple(sorted(f)) for f in self.boundary_facets().tolist()}
+        fsets = {}
+        for k, v in (facet_sets or {}).items():
+            f = index_array(f"facet set '{k}'", v, (None, 2), n)
+            for i, (a, b) in enumerate(f.tolist()):
+                if (min(a, b), max(a, b)) not in boundary:
+                    raise ValueError(f"facet set '{k}': entry {i} ({a}, {b}) is not an edge on the mesh boundary")
+            fsets[str(k)] = _frozen(f)
+        self._facet_sets = MappingProxyType(fsets)
+
+    # --- data -------------------------------------------------------------
+    @property
+    def points(self) -> NDArray[np.float64]:
+        """Reference coordinates (m), shape (n_nodes, 2), read-only."""
+        return self._points
+
+    @property
+    def triangles(self) -> NDArray[np.int64]:
+        """Counter-clockwise connectivity, shape (n_elements, 3), read-only."""
+        return self._triangles
+
+    @property
+    def interface_nodes(self) -> NDArray[np.bool_]:
+        """Nodes allowed to coincide with another, shape (n_nodes,)."""
+        return self._interface
+
+    @property
+    def node_sets(self) -> Mapping[str, NDArray[np.int64]]:
+        """Named node groups."""
+        return self._node_sets
+
+    @property
+    def facet_sets(self) -> Mapping[str, NDArray[np.int64]]:
+        """Named boundary-edge groups, each of shape (k, 2)."""
+        return self._facet_sets
+
+    @property
+    def element_sets(self) -> Mapping[str, NDArray[np.int64]]:
+        """Named element groups."""
+        return self._element_sets
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes."""
+        return len(self._points)
+
+    @property
+    def n_elements(self) -> int:
+        """Number of triangles."""
+        return len(self._triangles)
+
+    def __repr__(self) -> str:
+        groups = sorted({*self._node_sets, *self._facet_sets, *self._element_sets})
+        return f"Mesh({self.n_nodes} nodes, {self.n_elements} triangles, groups={groups})"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (
+            _rebuild,
+            (
+                self._points,
+                self._triangles,
+                dict(self._node_sets),
+                dict(self._facet_sets),
+                dict(self._element_sets),
+                self._interface,
+            ),
+        )
+
+    # --- derived ----------------------------------------------------------
+    def nodes(self, group: str | Any) -> NDArray[np.int64]:
+        """Node ids of a group: a node set, the nodes of a facet set or of an
+        element set (in that order of lookup), or an explicit id array.
+
+        Raises
+        ------
+        ValueError
+            If no group has that name.
+        """
+        if isinstance(group, str):
+            if group in self._node_sets:
+                return self._node_sets[group]
+            if group in self._facet_sets:
+                return np.unique(self._facet_sets[group])
+            if group in self._element_sets:
+                return np.unique(self._triangles[self._element_sets[group]])
+            raise ValueError(f"unknown group '{group}'; this mesh has {self.group_names()}")
+        return index_array("nodes", group, (None,), self.n_nodes).ravel()
+
+    def facets(self, group: str | Any) -> NDArray[np.int64]:
+        """Boundary edges of a facet set by name, or an explicit (k, 2) array."""
+        if isinstance(group, str):
+            if group not in self._facet_sets:
+                raise ValueError(f"unknown facet set '{group}'; this mesh has {sorted(self._facet_sets)}")
+            return self._facet_sets[group]
+        return index_array("facets", group, (None, 2), self.n_nodes)
+
+    def elements(self, group: str | Any) -> NDArray[np.int64]:
+        """Element ids of an element set by name, or an explicit id array."""
+        if isinstance(group, str):
+            if group not in self._element_sets:
+                raise ValueError(f"unknown element set '{group}'; this mesh has {sorted(self._element_sets)}")
+            return self._element_sets[group]
+        return index_array("elements", group, (None,), self.n_elements).ravel()
+
+    def group_names(self) -> list[str]:
+        """All group names."""
+        return sorted({*self._node_sets, *self._facet_sets, *self._element_sets})
+
+    def boundary_facets(self) -> NDArray[np.int64]:
+        """Every boundary edge, oriented with the body on its left, shape (k, 2)."""
+        t = self._triangles
+        e = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+        key = np.sort(e, axis=1)
+        _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+        return e[counts[inverse.ravel()] == 1]
+
+    def centroids(self) -> NDArray[np.float64]:
+        """Element centroids (m), shape (n_elements, 2)."""
+        return self._points[self._triangles].mean(axis=1)
+
+    def areas(self) -> NDArray[np.float64]:
+        """Element areas (m²)."""
+        p = self._points[self._triangles]
+        d1, d2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+        return 0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+
+    def min_altitudes(self) -> NDArray[np.float64]:
+        """Smallest altitude of each element (m): twice its area over its
+        longest edge."""
+        p = self._points[self._triangles]
+        edges = np.stack([p[:, 1] - p[:, 0], p[:, 2] - p[:, 1], p[:, 0] - p[:, 2]], axis=1)
+        longest = np.linalg.norm(edges, axis=2).max(axis=1)
+        return 2.0 * self.areas() / longest
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)`` (m)."""
+        lo, hi = self._points.min(axis=0), self._points.max(axis=0)
+        return float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1])
+
+    # --- constructors -----------------------------------------------------
+    @classmethod
+    def rectangle(
+        cls,
+        width: float,
+        height: float,
+        nx: int,
+        ny: int,
+        *,
+        origin: tuple[float, float] = (0.0, 0.0),
+        pattern: str = "alternating",
+    ) -> Mesh:
+        """A structured mesh of ``nx × ny`` cells, each split into two triangles.
+
+        Parameters
+        ----------
+        width, height : float
+            Size (m).
+        nx, ny : int
+            Cells along x and y.
+        origin : (float, float)
+            Lower-left corner (m).
+        pattern : {"alternating", "right", "left"}
+            Diagonal direction: all rising ("right"), all falling ("left"), or
+            alternating in a checkerboard (no preferred direction).
+
+        The facet sets ``left``, ``right``, ``bottom`` and ``top`` hold the
+        sides; the node sets ``lower_left`` etc. the corners.
+        """
+        w, h = positive("width", width), positive("height", height)
+        if int(nx) != nx or int(ny) != ny or nx < 1 or ny < 1:
+            raise ValueError(f"nx and ny must be positive integers, got {nx}, {ny}")
+        if pattern not in ("alternating", "right", "left"):
+            raise ValueError(f"pattern must be 'alternating', 'right' or 'left', got {pattern!r}")
+        nx, ny = int(nx), int(ny)
+        xs = origin[0] + w * np.arange(nx + 1) / nx
+        ys = origin[1] + h * np.arange(ny + 1) / ny
+        gx, gy = np.meshgrid(xs, ys)
+        points = np.column_stack([gx.ravel(), gy.ravel()])
+        i, j = np.meshgrid(np.arange(nx), np.arange(ny))
+        i, j = i.ravel(), j.ravel()
+        a = j * (nx + 1) + i
+        b, c, d = a + 1, a + nx + 2, a + nx + 1
+        rising = np.ones_like(a, dtype=bool) if pattern == "right" else np.zeros_like(a, dtype=bool)
+        if pattern == "alternating":
+            rising = (i + j) % 2 == 0
+        t1 = np.where(rising[:, None], np.column_stack([a, b, c]), np.column_stack([a, b, d]))
+        t2 = np.where(rising[:, None], np.column_stack([a, c, d]), np.column_stack([b, c, d]))
+        triangles = np.empty((2 * len(a), 3), dtype=np.int64)
+        triangles[0::2], triangles[1::2] = t1, t2
+        col = lambda k: np.arange(ny + 1) * (nx + 1) + k  # noqa: E731
+        row = lambda k: k * (nx + 1) + np.arange(nx + 1)  # noqa: E731
+        chain = lambda ids: np.column_stack([ids[:-1], ids[1:]])  # noqa: E731
+        facet_sets = {
+            "bottom": chain(row(0)),
+            "right": chain(col(nx)),
+            "top": chain(row(ny)[::-1]),
+            "left": chain(col(0)[::-1]),
+        }
+        node_sets = {
+            "lower_left": [0],
+            "lower_right": [nx],
+            "upper_right": [(ny + 1) * (nx + 1) - 1],
+            "upper_left": [ny * (nx + 1)],
+        }
+        return cls(points, triangles, facet_sets=facet_sets, node_sets=node_sets)
+
+    @classmethod
+    def read(cls, path: str | os.PathLike[str]) -> Mesh:
+        """Reads a triangle mesh with meshio (gmsh ``.msh``, ``.vtu``, …).
+
+        Named groups come from the file's cell sets (gmsh physical groups):
+        line cells become facet sets, triangle cells element sets, vertex
+        cells node sets. A z coordinate must be zero. Nodes no triangle uses
+        (gmsh geometry points) are dropped and the rest renumbered; clockwise
+        triangles are turned counter-clockwise.
+        """
+        import meshio
+
+        try:
+            m = meshio.read(os.fspath(path))
+        except Exception as exc:  # noqa: BLE001 - meshio raises many types
+            raise ValueError(f"{path}: cannot read mesh ({exc})") from None
+        pts = np.asarray(m.points, dtype=np.float64)
+        if pts.ndim != 2 or pts.shape[1] not in (2, 3):
+            raise ValueError(f"{path}: points must be 2D or 3D, got shape {pts.shape}")
+        if pts.shape[1] == 3:
+            if np.any(np.abs(pts[:, 2]) > 1e-9 * max(1.0, float(np.abs(pts[:, :2]).max()))):
+                k = int(np.argmax(np.abs(pts[:, 2])))
+                raise ValueError(f"{path}: node {k} has z = {pts[k, 2]}; fdem meshes are planar (z = 0)")
+            pts = pts[:, :2]
+        blocks = [(i, b) for i, b in enumerate(m.cells) if b.type == "triangle"]
+        if not blocks:
+            raise ValueError(f"{path}: no triangle cells (fdem needs linear triangles)")
+        if any(b.type in ("triangle6", "quad", "quad8", "quad9") for b in m.cells):
+            raise ValueError(f"{path}: only linear triangles are supported; found {[b.type for b in m.cells]}")
+        tri = np.concatenate([b.data for _, b in blocks]).astype(np.int64)
+        offsets = np.cumsum([0] + [len(b.data) for _, b in blocks])
+        used = np.unique(tri)
+        renum = -np.ones(len(pts), dtype=np.int64)
+        renum[used] = np.arange(len(used))
+        pts = pts[used]
+        tri = renum[tri]
+        p = pts[tri]
+        cw = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]) < 0
+        tri[cw] = tri[cw][:, [0, 2, 1]]
+        node_sets: dict[str, Any] = {}
+        facet_sets: dict[str, Any] = {}
+        element_sets: dict[str, Any] = {}
+        for name, per_block in (m.cell_sets or {}).items():
+            if name.startswith("gmsh:"):
+                continue
+            for bi, idx in enumerate(per_block):
+                if idx is None or len(idx) == 0:
+                    continue
+                block = m.cells[bi]
+                idx = np.asarray(idx, dtype=np.int64)
+                if block.type == "triangle":
+                    start = offsets[[i for i, _ in blocks].index(bi)]
+                    element_sets.setdefault(name, []).append(start + idx)
+                elif block.type == "line":
+                    facet_sets.setdefault(name, []).append(renum[block.data[idx]])
+                elif block.type == "vertex":
+                    node_sets.setdefault(name, []).append(renum[block.data[idx].ravel()])
+        return cls(
+            pts,
+            tri,
+            node_sets={k: np.concatenate(v) for k, v in node_sets.items()},
+            facet_sets={k: np.concatenate(v) for k, v in facet_sets.items()},
+            element_sets={k: np.concatenate(v) for k, v in element_sets.items()},
+        )
+
+
+def _rebuild(points: Any, triangles: Any, ns: Any, fs: Any, es: Any, iface: Any) -> Mesh:
+    return Mesh(points, triangles, node_sets=ns, facet_sets=fs, element_sets=es, interface_nodes=iface)
+
+
+def gmsh_rectangle(
+    width: float,
+    height: float,
+    size: float,
+    *,
+    origin: tuple[float, float] = (0.0, 0.0),
+    seed: int = 0,
+) -> Mesh:
+    """An unstructured mesh of a rectangle made with gmsh (the ``gmsh`` extra).
+
+    Parameters
+    ----------
+    width, height : float
+        Size (m).
+    size : float
+        Target element edge length (m).
+    origin : (float, float)
+        Lower-left corner (m).
+    seed : int
+        gmsh's random seed (``Mesh.RandomSeed``), for reproducible meshes.
+
+    The facet sets ``left``, ``right``, ``bottom`` and ``top`` hold the sides.
+    """
+    try:
+        import gmsh
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise ImportError("gmsh_rectangle needs gmsh: pip install 'fdem[gmsh]'") from exc
+    w, h, s = positive("width", width), positive("height", height), positive("size", size)
+    x0, y0 = float(origin[0]), float(origin[1])
+    gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.option.setNumber("Mesh.RandomSeed", int(seed))
+        gmsh.model.add("rectangle")
+        geo = gmsh.model.geo
+        c = [geo.addPoint(x0, y0, 0, s), geo.addPoint(x0 + w, y0, 0, s),
+             geo.addPoint(x0 + w, y0 + h, 0, s), geo.addPoint(x0, y0 + h, 0, s)]
+        lines = [geo.addLine(c[k], c[(k + 1) % 4]) for k in range(4)]
+        surf = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+        geo.synchronize()
+        for name, line in zip(("bottom", "right", "top", "left"), lines):
+            gmsh.model.addPhysicalGroup(1, [line], name=name)
+        gmsh.model.addPhysicalGroup(2, [surf], name="body")
+        gmsh.option.setNumber("Mesh.Algorithm", 6)
+        gmsh.model.mesh.generate(2)
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        index = {int(t): k for k, t in enumerate(tags)}
+        pts = np.asarray(coords).reshape(-1, 3)[:, :2]
+        _, tri_nodes = gmsh.model.mesh.getElementsByType(2)
+        tri = np.vectorize(index.__getitem__)(np.asarray(tri_nodes, dtype=np.int64)).reshape(-1, 3)
+        facet_sets = {}
+        for name, line in zip(("bottom", "right", "top", "left"), lines):
+            _, _, nodes = gmsh.model.mesh.getElements(1, line)
+            facet_sets[name] = np.vectorize(index.__getitem__)(np.asarray(nodes[0], dtype=np.int64)).reshape(-1, 2)
+    finally:
+        gmsh.finalize()
+    used = np.unique(tri)
+    renum = -np.ones(len(pts), dtype=np.int64)
+    renum[used] = np.arange(len(used))
+    tri = renum[tri]
+    p = pts[used][tri]
+    cw = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]) < 0
+    tri[cw] = tri[cw][:, [0, 2, 1]]
+    return Mesh(pts[used], tri, facet_sets={k: renum[v] for k, v in facet_sets.items()})

@@ -1,0 +1,314 @@
+"""The description of a model: mesh, materials, loads, supports and initial
+state. A :class:`Model` is a plain value (it pickles, and round-trips to a
+file with :meth:`Model.save` / :meth:`Model.load`), so a run is a pure function
+of its model and settings (DESIGN §9).
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, Union
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._checks import float_array, number
+from .materials import Elastic
+from .mesh import Mesh
+
+__all__ = ["Amplitude", "Model"]
+
+Material = Union[Elastic]
+
+_FORMAT = "fdem-model"
+_VERSION = 1
+
+
+@dataclass(frozen=True)
+class Amplitude:
+    """A piecewise-linear time history ``factor(t)``, constant beyond its ends.
+
+    Parameters
+    ----------
+    times : sequence of float
+        Sample times (s), strictly increasing.
+    values : sequence of float
+        Factors at those times.
+    """
+
+    times: tuple[float, ...]
+    values: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        t = float_array("Amplitude times", self.times, (None,))
+        v = float_array("Amplitude values", self.values, (None,))
+        if len(t) == 0 or len(t) != len(v):
+            raise ValueError("Amplitude needs equally many times and values, at least one")
+        if np.any(np.diff(t) <= 0):
+            raise ValueError("Amplitude times must be strictly increasing")
+        object.__setattr__(self, "times", tuple(t.tolist()))
+        object.__setattr__(self, "values", tuple(v.tolist()))
+
+    @classmethod
+    def ramp(cls, duration: float, start: float = 0.0) -> Amplitude:
+        """0 at ``start``, rising linearly to 1 at ``start + duration``."""
+        d = number("duration", duration)
+        if d <= 0:
+            raise ValueError(f"duration = {d} must be positive")
+        return cls((start, start + d), (0.0, 1.0))
+
+    def __call__(self, t: float) -> float:
+        """The factor at time ``t`` (s)."""
+        return float(np.interp(t, self.times, self.values))
+
+
+@dataclass(frozen=True)
+class _Constraint:
+    nodes: NDArray[np.int64]
+    fixed: tuple[bool, bool]
+    value: tuple[float, float]
+    amplitude: Amplitude | None
+
+
+@dataclass(frozen=True)
+class _Pressure:
+    facets: NDArray[np.int64]
+    pressure: float
+    amplitude: Amplitude | None
+
+
+class Model:
+    """A model: a mesh with materials, loads, supports and initial conditions.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The mesh.
+    material : Elastic, optional
+        One material for every element.
+    materials : mapping of element-set name to material, optional
+        Materials by element set; every element must get exactly one.
+
+    Examples
+    --------
+    >>> import fdem
+    >>> mesh = fdem.Mesh.rectangle(2.0, 1.0, 8, 4)
+    >>> model = fdem.Model(mesh, material=fdem.Elastic(E=30e9, nu=0.25, rho=2700))
+    >>> model.set_gravity(0.0, -9.81).fix("bottom", y=True).fix("left", x=True)  # doctest: +ELLIPSIS
+    <fdem.Model ...>
+    """
+
+    def __init__(
+        self,
+        mesh: Mesh,
+        material: Material | None = None,
+        *,
+        materials: Mapping[str, Material] | None = None,
+    ) -> None:
+        if not isinstance(mesh, Mesh):
+            raise ValueError(f"mesh must be a fdem.Mesh, got {type(mesh).__name__}")
+        self.mesh = mesh
+        if (material is None) == (materials is None):
+            raise ValueError("give either material= (one for all elements) or materials= (by element set)")
+        self._materials: list[Material] = []
+        self._element_material = -np.ones(mesh.n_elements, dtype=np.int64)
+        if material is not None:
+            self._check_material("material", material)
+            self._materials.append(material)
+            self._element_material[:] = 0
+        else:
+            assert materials is not None
+            for name, mat in materials.items():
+                self._check_material(f"materials['{name}']", mat)
+                ids = mesh.elements(name)
+                taken = ids[self._element_material[ids] >= 0]
+                if len(taken):
+                    raise ValueError(f"element {int(taken[0])} of set '{name}' already has a material")
+                if mat not in self._materials:
+                    self._materials.append(mat)
+                self._element_material[ids] = self._materials.index(mat)
+            missing = np.flatnonzero(self._element_material < 0)
+            if len(missing):
+                raise ValueError(f"element {int(missing[0])} has no material (not in any set of materials=)")
+        self.gravity: tuple[float, float] = (0.0, 0.0)
+        self._constraints: list[_Constraint] = []
+        self._pressures: list[_Pressure] = []
+        self._initial_velocity: NDArray[np.float64] | None = None
+        self._initial_stress: NDArray[np.float64] | None = None
+
+    @staticmethod
+    def _check_material(name: str, m: Any) -> None:
+        if not isinstance(m, Elastic):
+            raise ValueError(f"{name} must be a fdem material (e.g. fdem.Elastic), got {type(m).__name__}")
+
+    def __repr__(self) -> str:
+        return f"<fdem.Model {self.mesh!r}, {len(self._materials)} material(s)>"
+
+    # --- loads and supports ----------------------------------------------
+    def set_gravity(self, gx: float, gy: float) -> Model:
+        """Gravitational acceleration (m/s²), e.g. ``(0, -9.81)``."""
+        self.gravity = (number("gx", gx), number("gy", gy))
+        return self
+
+    def fix(self, where: str | Any, *, x: bool = True, y: bool = True) -> Model:
+        """Fixes the x and/or y velocity of a group's nodes to zero. A roller
+        on a vertical side is ``fix(side, x=True, y=False)``.
+
+        Parameters
+        ----------
+        where : str or array_like of int
+            A group name (node, facet or element set) or node ids.
+        """
+        if not (x or y):
+            raise ValueError("fix needs x=True and/or y=True")
+        self._constraints.append(_Constraint(self.mesh.nodes(where), (bool(x), bool(y)), (0.0, 0.0), None))
+        return self
+
+    def prescribe_velocity(
+        self,
+        where: str | Any,
+        *,
+        vx: float | None = None,
+        vy: float | None = None,
+        amplitude: Amplitude | None = None,
+    ) -> Model:
+        """Holds the given velocity components (m/s) of a group's nodes,
+        scaled by ``amplitude(t)`` if given."""
+        if vx is None and vy is None:
+            raise ValueError("prescribe_velocity needs vx and/or vy")
+        if amplitude is not None and not isinstance(amplitude, Amplitude):
+            raise ValueError("amplitude must be a fdem.Amplitude")
+        value = (0.0 if vx is None else number("vx", vx), 0.0 if vy is None else number("vy", vy))
+        self._constraints.append(_Constraint(self.mesh.nodes(where), (vx is not None, vy is not None), value, amplitude))
+        return self
+
+    def pressure(self, facets: str | Any, p: float, *, amplitude: Amplitude | None = None) -> Model:
+        """Follower pressure ``p`` (Pa, positive pushes into the body) on
+        boundary facets (a facet-set name or a (k, 2) node-pair array),
+        scaled by ``amplitude(t)`` if given."""
+        if amplitude is not None and not isinstance(amplitude, Amplitude):
+            raise ValueError("amplitude must be a fdem.Amplitude")
+        self._pressures.append(_Pressure(self.mesh.facets(facets), number("p", p), amplitude))
+        return self
+
+    # --- initial state ----------------------------------------------------
+    def set_initial_velocity(
+        self, value: tuple[float, float] | Any | Callable[[Any, Any], Any], where: str | Any | None = None
+    ) -> Model:
+        """Initial velocity (m/s): a constant ``(vx, vy)``, an array of shape
+        (n_nodes, 2), or a function ``f(x, y) -> (n, 2)`` of node reference
+        coordinates; applied to the nodes of ``where`` (default: all)."""
+        nodes = np.arange(self.mesh.n_nodes) if where is None else self.mesh.nodes(where)
+        v = self._field("initial velocity", value, self.mesh.points[nodes], 2, len(nodes), self.mesh.n_nodes, nodes)
+        if self._initial_velocity is None:
+            self._initial_velocity = np.zeros((self.mesh.n_nodes, 2))
+        self._initial_velocity[nodes] = v
+        return self
+
+    def set_initial_stress(
+        self, value: tuple[float, float, float, float] | Any | Callable[[Any, Any], Any], where: str | Any | None = None
+    ) -> Model:
+        """Initial Cauchy stress ``[xx, yy, zz, xy]`` (Pa, tension positive):
+        a constant, an array of shape (n_elements, 4), or a function
+        ``f(x, y) -> (n, 4)`` of element centroids; applied to the elements of
+        ``where`` (default: all)."""
+        elems = np.arange(self.mesh.n_elements) if where is None else self.mesh.elements(where)
+        c = self.mesh.centroids()[elems]
+        s = self._field("initial stress", value, c, 4, len(elems), self.mesh.n_elements, elems)
+        if self._initial_stress is None:
+            self._initial_stress = np.zeros((self.mesh.n_elements, 4))
+        self._initial_stress[elems] = s
+        return self
+
+    @staticmethod
+    def _field(name: str, value: Any, xy: Any, cols: int, n: int, total: int, ids: Any) -> NDArray[np.float64]:
+        if callable(value):
+            out = value(xy[:, 0], xy[:, 1])
+            return float_array(f"{name} (returned by the function)", np.broadcast_to(out, (n, cols)), (n, cols))
+        if np.ndim(value) == 1:
+            return np.broadcast_to(float_array(name, value, (cols,)), (n, cols)).copy()
+        full = float_array(name, value, (None, cols))
+        if len(full) == total:
+            return full[ids]
+        if len(full) == n:
+            return full
+        raise ValueError(f"{name}: expected {total} or {n} rows, got {len(full)}")
+
+    # --- persistence ------------------------------------------------------
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Writes the model to a file (pickle with a format header), atomically."""
+        tmp = f"{os.fspath(path)}.tmp"
+        with open(tmp, "wb") as f:
+            pickle.dump({"format": _FORMAT, "version": _VERSION, "model": self}, f, protocol=4)
+        os.replace(tmp, path)
+
+    @staticmethod
+    def load(path: str | os.PathLike[str]) -> Model:
+        """Reads a model written by :meth:`save`. Only load files you trust
+        (the format is a pickle)."""
+        try:
+            with open(path, "rb") as f:
+                data = pickle.load(f)
+        except (OSError, pickle.UnpicklingError, EOFError) as exc:
+            raise ValueError(f"{path}: not a readable fdem model file ({exc})") from None
+        if not isinstance(data, dict) or data.get("format") != _FORMAT:
+            raise ValueError(f"{path}: not an fdem model file")
+        if data.get("version", 0) > _VERSION:
+            raise ValueError(f"{path}: written by a newer fdem (format {data['version']} > {_VERSION})")
+        model = data["model"]
+        assert isinstance(model, Model)
+        return model
+
+    # --- kernel arrays ----------------------------------------------------
+    def _amplitude_table(self) -> list[Amplitude]:
+        table: list[Amplitude] = []
+        for a in [c.amplitude for c in self._constraints] + [p.amplitude for p in self._pressures]:
+            if a is not None and a not in table:
+                table.append(a)
+        return table
+
+    def kernel_arrays(self) -> dict[str, Any]:
+        """The arrays the native kernel is built from (for inspection)."""
+        amps = self._amplitude_table()
+        amp_id = lambda a: -1 if a is None else amps.index(a)  # noqa: E731
+        cn, cf, cv, ca = [], [], [], []
+        for c in self._constraints:
+            k = len(c.nodes)
+            cn.append(c.nodes)
+            cf.append(np.tile(c.fixed, (k, 1)))
+            cv.append(np.tile(c.value, (k, 1)))
+            ca.append(np.full(k, amp_id(c.amplitude), dtype=np.int64))
+        pf, pv, pa = [], [], []
+        for p in self._pressures:
+            k = len(p.facets)
+            pf.append(p.facets)
+            pv.append(np.full(k, p.pressure))
+            pa.append(np.full(k, amp_id(p.amplitude), dtype=np.int64))
+        out: dict[str, Any] = {
+            "points": np.ascontiguousarray(self.mesh.points),
+            "triangles": np.ascontiguousarray(self.mesh.triangles),
+            "materials": np.array([m._kernel_row() for m in self._materials], dtype=np.float64),
+            "element_material": self._element_material.copy(),
+            "may_coincide": np.ascontiguousarray(self.mesh.interface_nodes),
+            "gravity": self.gravity,
+            "amplitudes": [(list(a.times), list(a.values)) for a in amps],
+            "initial_velocity": self._initial_velocity,
+            "initial_stress": self._initial_stress,
+        }
+        if cn:
+            out.update(
+                constraint_nodes=np.concatenate(cn),
+                constraint_fixed=np.ascontiguousarray(np.concatenate(cf).astype(bool)),
+                constraint_values=np.concatenate(cv).astype(np.float64),
+                constraint_amplitude=np.concatenate(ca),
+            )
+        if pf:
+            out.update(
+                pressure_facets=np.concatenate(pf),
+                pressure_values=np.concatenate(pv),
+                pressure_amplitude=np.concatenate(pa),
+            )
+        return out

@@ -1,0 +1,132 @@
+"""Result files: one VTU per output step plus a ``.pvd`` index (DESIGN §6),
+and an energy history as CSV.
+
+Every file is written to a temporary name and renamed into place, so a frame
+listed in the index is always complete and an interrupted run leaves a valid
+series behind.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from .simulation import Simulation
+
+__all__ = ["VtuSeries", "write_vtu", "principal_stresses"]
+
+
+def principal_stresses(stress: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Principal stresses ``σ1 ≥ σ2 ≥ σ3`` (Pa) of ``[xx, yy, zz, xy]`` rows,
+    with ``σ_zz`` as one of the three, shape (n, 3)."""
+    mean = 0.5 * (stress[:, 0] + stress[:, 1])
+    r = np.hypot(0.5 * (stress[:, 0] - stress[:, 1]), stress[:, 3])
+    p = np.column_stack([mean + r, mean - r, stress[:, 2]])
+    return -np.sort(-p, axis=1)
+
+
+def _pad3(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.column_stack([a, np.zeros(len(a))])
+
+
+def cell_fields(sim: Simulation) -> dict[str, NDArray[Any]]:
+    """The element fields written to each frame."""
+    stress = sim.stress()
+    return {
+        "stress": stress,
+        "principal_stress_1": principal_stresses(stress)[:, 0],
+        "active": sim.active().astype(np.uint8),
+    }
+
+
+def write_vtu(sim: Simulation, path: str | os.PathLike[str]) -> None:
+    """Writes the current state as one VTU file (atomically)."""
+    import meshio
+
+    path = os.fspath(path)
+    x = sim.positions()
+    mesh = meshio.Mesh(
+        _pad3(x),
+        [("triangle", sim.triangles())],
+        point_data={
+            "displacement": _pad3(x - sim.reference_positions()),
+            "velocity": _pad3(sim.velocities()),
+        },
+        cell_data={k: [v] for k, v in cell_fields(sim).items()},
+    )
+    tmp = path + ".tmp"
+    meshio.write(tmp, mesh, file_format="vtu")
+    os.replace(tmp, path)
+
+
+class VtuSeries:
+    """A time series of VTU frames with a ``.pvd`` index and an energy CSV.
+
+    Parameters
+    ----------
+    directory : path
+        Where the files go (created if needed).
+    name : str
+        Base name: frames are ``{name}_{k:05d}.vtu``, the index
+        ``{name}.pvd`` and the energy history ``{name}_energy.csv``.
+    overwrite : bool
+        Replace an existing series of the same name. Without it an existing
+        index is an error, so earlier results are never lost by accident.
+    """
+
+    def __init__(self, directory: str | os.PathLike[str], name: str = "fdem", *, overwrite: bool = False) -> None:
+        self.directory = Path(directory)
+        self.name = name
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self.index = self.directory / f"{name}.pvd"
+        self.energy_csv = self.directory / f"{name}_energy.csv"
+        if self.index.exists() and not overwrite:
+            raise FileExistsError(
+                f"{self.index} already exists; pass overwrite=True or choose another output name"
+            )
+        for old in self.directory.glob(f"{name}_[0-9][0-9][0-9][0-9][0-9].vtu"):
+            old.unlink()
+        self.frames: list[tuple[float, str]] = []
+        self._energy_keys: list[str] | None = None
+        if self.energy_csv.exists():
+            self.energy_csv.unlink()
+
+    def write(self, sim: Simulation) -> Path:
+        """Writes the current state as the next frame and updates the index."""
+        k = len(self.frames)
+        fname = f"{self.name}_{k:05d}.vtu"
+        write_vtu(sim, self.directory / fname)
+        self.frames.append((sim.time, fname))
+        self._write_index()
+        self._append_energy(sim)
+        return self.directory / fname
+
+    def _write_index(self) -> None:
+        lines = ['<?xml version="1.0"?>', '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">', "  <Collection>"]
+        for t, f in self.frames:
+            lines.append(f'    <DataSet timestep="{t:.9g}" group="" part="0" file={quoteattr(f)}/>')
+        lines += ["  </Collection>", "</VTKFile>", ""]
+        tmp = self.index.with_suffix(".pvd.tmp")
+        tmp.write_text("\n".join(lines))
+        os.replace(tmp, self.index)
+
+    def _append_energy(self, sim: Simulation) -> None:
+        e = sim.energies()
+        row = {"time": sim.time, "step": sim.steps, **e}
+        new = self._energy_keys is None
+        if new:
+            self._energy_keys = list(row)
+        with open(self.energy_csv, "a", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=self._energy_keys)
+            if new:
+                w.writeheader()
+            w.writerow(row)
+            f.flush()
+            os.fsync(f.fileno())

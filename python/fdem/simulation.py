@@ -1,0 +1,247 @@
+"""Running a model: :class:`Simulation` drives the native time loop and
+writes results."""
+
+from __future__ import annotations
+
+import os
+import time as _time
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from . import _core
+from ._checks import number, positive
+from .model import Model
+from .output import VtuSeries, write_vtu
+from .progress import RunProgress
+
+__all__ = ["Simulation"]
+
+
+class Simulation:
+    """An explicit FDEM run of a :class:`Model`.
+
+    Parameters
+    ----------
+    model : Model
+        What to simulate (copied into the kernel; later changes to the model
+        do not affect this simulation).
+    threads : int, optional
+        Worker threads (default: all cores). Results are bit-for-bit the same
+        for any count.
+    safety : float
+        Safety factor ``s`` on the critical step ``min_e 2/ω_e`` (0 < s ≤ 1).
+    dt : float, optional
+        A fixed time step (s) instead of the automatic one.
+    mass_damping : float
+        Mass-proportional damping ``α`` (1/s).
+    stiffness_damping : float
+        Stiffness-proportional (element viscous) damping ``β`` (s).
+    dt_interval : int
+        Steps between re-evaluations of the automatic stable step.
+
+    Raises
+    ------
+    ValueError
+        For any invalid model or setting, naming the node, element or
+        parameter.
+    """
+
+    def __init__(
+        self,
+        model: Model,
+        *,
+        threads: int | None = None,
+        safety: float = 0.8,
+        dt: float | None = None,
+        mass_damping: float = 0.0,
+        stiffness_damping: float = 0.0,
+        dt_interval: int = 100,
+    ) -> None:
+        if not isinstance(model, Model):
+            raise ValueError(f"model must be a fdem.Model, got {type(model).__name__}")
+        if threads is not None and (int(threads) != threads or threads < 1):
+            raise ValueError(f"threads = {threads!r} must be a positive integer")
+        self.model = model
+        self._settings = self._check_settings(safety, dt, mass_damping, stiffness_damping, dt_interval)
+        self._core = _core.Simulation(**model.kernel_arrays(), **self._settings, threads=int(threads or 0))
+        self._series: dict[tuple[str, str], VtuSeries] = {}
+
+    @staticmethod
+    def _check_settings(safety: Any, dt: Any, alpha: Any, beta: Any, interval: Any) -> dict[str, Any]:
+        s = number("safety", safety)
+        if not 0 < s <= 1:
+            raise ValueError(f"safety = {s} must lie in (0, 1]")
+        if int(interval) != interval or interval < 1:
+            raise ValueError(f"dt_interval = {interval!r} must be a positive integer")
+        return {
+            "safety": s,
+            "fixed_dt": None if dt is None else positive("dt", dt),
+            "mass_damping": positive("mass_damping", alpha, allow_zero=True),
+            "stiffness_damping": positive("stiffness_damping", beta, allow_zero=True),
+            "dt_interval": int(interval),
+        }
+
+    def configure(self, **changes: Any) -> Simulation:
+        """Changes run settings between stages (``safety``, ``dt``,
+        ``mass_damping``, ``stiffness_damping``, ``dt_interval``)."""
+        known = {"safety", "dt", "mass_damping", "stiffness_damping", "dt_interval"}
+        unknown = set(changes) - known
+        if unknown:
+            raise ValueError(f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
+        cur = dict(self._settings)
+        cur["dt"] = cur.pop("fixed_dt")
+        cur.update(changes)
+        self._settings = self._check_settings(
+            cur["safety"], cur["dt"], cur["mass_damping"], cur["stiffness_damping"], cur["dt_interval"]
+        )
+        self._core.set_settings(**self._settings)
+        return self
+
+    # --- state ------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        """Simulated time (s)."""
+        return float(self._core.time)
+
+    @property
+    def steps(self) -> int:
+        """Steps taken."""
+        return int(self._core.steps)
+
+    @property
+    def time_step(self) -> float:
+        """The step in use (s)."""
+        return float(self._core.time_step)
+
+    @property
+    def critical_time_step(self) -> float:
+        """``min_e 2/ω_e`` of the current mesh (s), before the safety factor."""
+        return float(self._core.critical_time_step)
+
+    @property
+    def threads(self) -> int:
+        """Worker threads."""
+        return int(self._core.threads)
+
+    def positions(self) -> NDArray[np.float64]:
+        """Current node coordinates (m), shape (n_nodes, 2), a copy."""
+        return self._core.positions()
+
+    def reference_positions(self) -> NDArray[np.float64]:
+        """Reference node coordinates (m), shape (n_nodes, 2)."""
+        return self._core.reference_positions()
+
+    def displacements(self) -> NDArray[np.float64]:
+        """Node displacements from the reference configuration (m)."""
+        return self._core.positions() - self._core.reference_positions()
+
+    def velocities(self) -> NDArray[np.float64]:
+        """Node velocities at the current whole step (m/s)."""
+        return self._core.velocities()
+
+    def stress(self) -> NDArray[np.float64]:
+        """Cauchy stress per element ``[xx, yy, zz, xy]`` (Pa, tension positive)."""
+        return self._core.stress()
+
+    def triangles(self) -> NDArray[np.int64]:
+        """Current connectivity (changes when cracks are inserted)."""
+        return self._core.triangles()
+
+    def masses(self) -> NDArray[np.float64]:
+        """Lumped nodal masses (kg per unit thickness)."""
+        return self._core.masses()
+
+    def areas(self) -> NDArray[np.float64]:
+        """Current element areas (m²)."""
+        return self._core.areas()
+
+    def active(self) -> NDArray[np.bool_]:
+        """Whether each element is active (not excavated)."""
+        return self._core.active()
+
+    def energies(self) -> dict[str, float]:
+        """The energy account (J per unit thickness): ``kinetic``, ``elastic``,
+        ``external_work``, ``support_work``, damping and dissipation terms,
+        and the balance ``residual``."""
+        return dict(self._core.energies())
+
+    # --- stepping ---------------------------------------------------------
+    def step(self, n: int = 1) -> Simulation:
+        """Advances exactly ``n`` steps."""
+        if int(n) != n or n < 0:
+            raise ValueError(f"n = {n!r} must be a non-negative integer")
+        self._core.step(int(n))
+        return self
+
+    def set_prescribed_velocity(self, nodes: Any, values: Any) -> None:
+        """Changes the prescribed velocity (m/s) of nodes that already have one."""
+        self._core.set_prescribed_velocity(np.asarray(nodes, dtype=np.int64).ravel(), np.asarray(values, dtype=np.float64).reshape(-1, 2))
+
+    def write_vtu(self, path: str | os.PathLike[str]) -> None:
+        """Writes the current state to one VTU file."""
+        write_vtu(self, path)
+
+    def run(
+        self,
+        until: float,
+        *,
+        output_every: float | None = None,
+        output: str | os.PathLike[str] | None = None,
+        name: str = "fdem",
+        overwrite: bool = False,
+        progress: bool = True,
+    ) -> Simulation:
+        """Advances to simulated time ``until`` (s), writing a frame every
+        ``output_every`` seconds into the directory ``output``.
+
+        The run stops at the first step at or after ``until``; steps are not
+        shortened to hit output times, so results do not depend on the output
+        interval. A run may be continued by calling :meth:`run` again (the same
+        series continues). Ctrl-C stops within a second at a step boundary
+        after writing the current state as a final frame.
+
+        Raises
+        ------
+        fdem.errors.SimulationError
+            When an element inverts or a value becomes NaN; frames written
+            before stay valid.
+        """
+        until = number("until", until)
+        if output_every is not None:
+            output_every = positive("output_every", output_every)
+        series = None
+        if output is not None:
+            key = (os.fspath(output), name)
+            if key not in self._series:
+                self._series[key] = VtuSeries(output, name, overwrite=overwrite)
+                self._series[key].write(self)
+            series = self._series[key]
+        next_out = self.time + output_every if output_every else np.inf
+        last_written = self.time
+        budget = 8
+        with RunProgress(self.time, until, enabled=progress) as bar:
+            try:
+                while self.time < until:
+                    target = min(until, next_out)
+                    t0 = _time.perf_counter()
+                    taken = self._core.advance(target, budget)
+                    wall = _time.perf_counter() - t0
+                    if taken == budget and wall < 0.1:
+                        budget *= 2
+                    elif wall > 0.4 and budget > 1:
+                        budget //= 2
+                    bar.update(self.time, self.steps)
+                    if series is not None and self.time >= next_out:
+                        series.write(self)
+                        last_written = self.time
+                    while self.time >= next_out:
+                        next_out += output_every  # type: ignore[operator]
+            except KeyboardInterrupt:
+                if series is not None and self.time > last_written:
+                    series.write(self)
+                raise
+        if series is not None and self.time > last_written:
+            series.write(self)
+        return self
