@@ -69,7 +69,7 @@ class Amplitude:
 class _Constraint:
     nodes: NDArray[np.int64]
     fixed: tuple[bool, bool]
-    value: tuple[float, float]
+    value: Any  # (2,) or (n, 2) velocities
     amplitude: Amplitude | None
 
 
@@ -171,18 +171,39 @@ class Model:
         self,
         where: str | Any,
         *,
-        vx: float | None = None,
-        vy: float | None = None,
+        vx: float | Callable[[Any, Any], Any] | None = None,
+        vy: float | Callable[[Any, Any], Any] | None = None,
         amplitude: Amplitude | None = None,
     ) -> Model:
-        """Holds the given velocity components (m/s) of a group's nodes,
-        scaled by ``amplitude(t)`` if given."""
+        """Holds velocity components (m/s) of a group's nodes, scaled by
+        ``amplitude(t)`` if given.
+
+        Parameters
+        ----------
+        where : str or array_like of int
+            A group name or node ids.
+        vx, vy : float or callable, optional
+            A constant, or a function ``f(x, y)`` of the nodes' reference
+            coordinates returning one value per node (e.g. a linear field).
+            A component left as ``None`` stays free.
+        amplitude : Amplitude, optional
+            Time history multiplying both components.
+        """
         if vx is None and vy is None:
             raise ValueError("prescribe_velocity needs vx and/or vy")
         if amplitude is not None and not isinstance(amplitude, Amplitude):
             raise ValueError("amplitude must be a fdem.Amplitude")
-        value = (0.0 if vx is None else number("vx", vx), 0.0 if vy is None else number("vy", vy))
-        self._constraints.append(_Constraint(self.mesh.nodes(where), (vx is not None, vy is not None), value, amplitude))
+        nodes = self.mesh.nodes(where)
+        xy = self.mesh.points[nodes]
+        values = np.zeros((len(nodes), 2))
+        for d, (name, comp) in enumerate((("vx", vx), ("vy", vy))):
+            if comp is None:
+                continue
+            if callable(comp):
+                values[:, d] = float_array(f"{name} (returned by the function)", np.broadcast_to(comp(xy[:, 0], xy[:, 1]), (len(nodes),)), (len(nodes),))
+            else:
+                values[:, d] = number(name, comp)
+        self._constraints.append(_Constraint(nodes, (vx is not None, vy is not None), values, amplitude))
         return self
 
     def pressure(self, facets: str | Any, p: float, *, amplitude: Amplitude | None = None) -> Model:
@@ -279,7 +300,7 @@ class Model:
             k = len(c.nodes)
             cn.append(c.nodes)
             cf.append(np.tile(c.fixed, (k, 1)))
-            cv.append(np.tile(c.value, (k, 1)))
+            cv.append(np.broadcast_to(np.asarray(c.value, dtype=np.float64), (k, 2)))
             ca.append(np.full(k, amp_id(c.amplitude), dtype=np.int64))
         pf, pv, pa = [], [], []
         for p in self._pressures:

@@ -15,6 +15,7 @@
 //! * [`stability`]: the element's own highest eigenfrequency of the lumped
 //!   system, for the critical time step (DESIGN §4.2).
 
+pub mod batch;
 pub mod corotational;
 pub mod forces;
 pub mod kinematics;

@@ -524,11 +524,19 @@ fn validate_mesh(
     })
 }
 
+/// Diagnostic: panics inside the guard, to show that a kernel panic reaches
+/// Python as `RuntimeError` (used by the test suite).
+#[pyfunction]
+fn _panic_selftest() -> PyResult<()> {
+    guard(|| -> PyResult<()> { panic!("deliberate panic from _panic_selftest") })
+}
+
 /// The native module.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PySimulation>()?;
     m.add_function(wrap_pyfunction!(validate_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(_panic_selftest, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

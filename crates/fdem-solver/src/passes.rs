@@ -1,7 +1,7 @@
 //! The parallel passes of one step. Each works on fixed chunks of
 //! [`CHUNK`](crate::CHUNK) entities and writes one partial per chunk.
 
-use fdem_element::corotational::corotational_frame;
+use fdem_element::batch::{corotational_frames, TriLanes, LANES};
 use fdem_element::kinematics::ReferenceShape;
 use fdem_element::stability::critical_time_step;
 use fdem_element::tensor::rotate;
@@ -170,44 +170,49 @@ pub(crate) fn element_pass(
         .for_each(|(c, ((sc, fc), part))| {
             let mut acc = ElementPartial::default();
             let base = c * CHUNK;
-            for j in 0..sc.len() {
-                let e = base + j;
-                let f_out = &mut fc[3 * j..3 * j + 3];
-                if !inp.active[e] {
-                    continue;
-                }
-                let t = inp.conn[e];
-                let x = gather(inp.x, t);
-                let v = gather(inp.v, t);
-                let frame = corotational_frame(&inp.reference[e], &x, &v, inp.dt);
-                if frame.is_inverted() {
-                    acc.bad_element.get_or_insert(e as u32);
-                    f_out.copy_from_slice(&[[0.0; 2]; 3]);
-                    continue;
-                }
-                let mat = &inp.materials[inp.material[e] as usize];
-                let old = sc[j];
-                let new = mat.elastic.trial(old, frame.d_hat, inp.dt);
-                sc[j] = new;
-                let dh = frame.d_hat;
-                let power = 0.5
-                    * ((old[0] + new[0]) * dh[0]
-                        + (old[1] + new[1]) * dh[1]
-                        + 2.0 * (old[3] + new[3]) * dh[2]);
-                acc.internal += 0.5 * frame.twice_area_mid * inp.dt * power;
-                let mut sigma = rotate(new, frame.cos_new, frame.sin_new);
-                if inp.beta > 0.0 {
-                    let sv = mat.elastic.viscous(frame.d, inp.beta);
-                    let d = frame.d;
-                    acc.viscous += 0.5
-                        * frame.twice_area_mid
-                        * inp.dt
-                        * (sv[0] * d[0] + sv[1] * d[1] + 2.0 * sv[3] * d[2]);
-                    for k in 0..4 {
-                        sigma[k] += sv[k];
+            for j0 in (0..sc.len()).step_by(LANES) {
+                // Lanes past the end of the chunk repeat its last element; their
+                // results are discarded.
+                let last = sc.len() - 1;
+                let lane_elem = |l: usize| base + (j0 + l).min(last);
+                let conn: [[u32; 3]; LANES] = std::array::from_fn(|l| inp.conn[lane_elem(l)]);
+                let dm_inv = std::array::from_fn(|k| std::array::from_fn(|l| inp.reference[lane_elem(l)].dm_inv[k]));
+                let x: TriLanes = std::array::from_fn(|k| std::array::from_fn(|l| inp.x[conn[l][k / 2] as usize][k % 2]));
+                let v: TriLanes = std::array::from_fn(|k| std::array::from_fn(|l| inp.v[conn[l][k / 2] as usize][k % 2]));
+                let frames = corotational_frames(&dm_inv, &x, &v, inp.dt);
+                for l in 0..LANES.min(sc.len() - j0) {
+                    let j = j0 + l;
+                    let e = base + j;
+                    let f_out = &mut fc[3 * j..3 * j + 3];
+                    if !inp.active[e] {
+                        continue;
                     }
+                    if frames.is_inverted(l) {
+                        acc.bad_element.get_or_insert(e as u32);
+                        f_out.copy_from_slice(&[[0.0; 2]; 3]);
+                        continue;
+                    }
+                    let mat = &inp.materials[inp.material[e] as usize];
+                    let dh = frames.d_hat(l);
+                    let old = sc[j];
+                    let new = mat.elastic.trial(old, dh, inp.dt);
+                    sc[j] = new;
+                    let power = 0.5
+                        * ((old[0] + new[0]) * dh[0] + (old[1] + new[1]) * dh[1] + 2.0 * (old[3] + new[3]) * dh[2]);
+                    let half_area = 0.5 * frames.twice_area_mid[l];
+                    acc.internal += half_area * inp.dt * power;
+                    let mut sigma = rotate(new, frames.cos_new[l], frames.sin_new[l]);
+                    if inp.beta > 0.0 {
+                        let d = frames.d(l);
+                        let sv = mat.elastic.viscous(d, inp.beta);
+                        acc.viscous += half_area * inp.dt * (sv[0] * d[0] + sv[1] * d[1] + 2.0 * sv[3] * d[2]);
+                        for k in 0..4 {
+                            sigma[k] += sv[k];
+                        }
+                    }
+                    let xe = [[x[0][l], x[1][l]], [x[2][l], x[3][l]], [x[4][l], x[5][l]]];
+                    f_out.copy_from_slice(&internal_forces(&xe, &sigma));
                 }
-                f_out.copy_from_slice(&internal_forces(&x, &sigma));
             }
             *part = acc;
         });

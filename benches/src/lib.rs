@@ -1,0 +1,52 @@
+//! Shared set-up for the criterion benchmarks: structured test models built
+//! directly in Rust, so a bench measures the kernel and nothing else.
+
+use fdem_solver::{Constraint, MaterialSpec, ModelSpec, PressureLoad};
+
+/// A block of `nx × ny` cells (2 triangles each, 1 m cells) of rock under
+/// gravity with rollers on the sides and base and a pressure on top.
+pub fn block(nx: usize, ny: usize) -> ModelSpec {
+    let id = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+    let mut points = Vec::with_capacity((nx + 1) * (ny + 1));
+    for j in 0..=ny {
+        for i in 0..=nx {
+            points.push([i as f64, j as f64]);
+        }
+    }
+    let mut triangles = Vec::with_capacity(2 * nx * ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            if (i + j) % 2 == 0 {
+                triangles.push([a, b, c].map(u64::from));
+                triangles.push([a, c, d].map(u64::from));
+            } else {
+                triangles.push([a, b, d].map(u64::from));
+                triangles.push([b, c, d].map(u64::from));
+            }
+        }
+    }
+    let roller = |node, fixed| Constraint { node, fixed, value: [0.0; 2], amplitude: None };
+    let mut constraints = Vec::new();
+    for i in 0..=nx {
+        constraints.push(roller(id(i, 0), [false, true]));
+    }
+    for j in 0..=ny {
+        constraints.push(roller(id(0, j), [true, false]));
+        constraints.push(roller(id(nx, j), [true, false]));
+    }
+    let pressures = (0..nx)
+        .map(|i| PressureLoad { nodes: [id(i, ny), id(i + 1, ny)], pressure: 1e6, amplitude: None })
+        .collect();
+    let m = triangles.len();
+    ModelSpec {
+        points,
+        triangles,
+        materials: vec![MaterialSpec { density: 3100.0, young: 60e9, poisson: 0.25 }],
+        element_material: vec![0; m],
+        gravity: [0.0, -9.81],
+        constraints,
+        pressures,
+        ..Default::default()
+    }
+}

@@ -1,0 +1,151 @@
+"""The Python API: meshes from files, output files, persistence, CLI, stubs."""
+
+from __future__ import annotations
+
+import pickle
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+
+import meshio
+import numpy as np
+import pytest
+from conftest import ROCK
+
+import fdem
+from fdem.cli import main as cli_main
+
+
+def _gmsh_file(path):
+    gmsh = pytest.importorskip("gmsh")
+    gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        geo = gmsh.model.geo
+        p = [geo.addPoint(*xy, 0, 0.25) for xy in [(0, 0), (2, 0), (2, 1), (0, 1)]]
+        lines = [geo.addLine(p[k], p[(k + 1) % 4]) for k in range(4)]
+        surf = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+        geo.synchronize()
+        gmsh.model.addPhysicalGroup(1, [lines[0]], name="base")
+        gmsh.model.addPhysicalGroup(1, [lines[2]], name="roof")
+        gmsh.model.addPhysicalGroup(2, [surf], name="rock")
+        gmsh.model.mesh.generate(2)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+
+
+def test_read_gmsh_file_with_named_groups(tmp_path):
+    f = tmp_path / "block.msh"
+    _gmsh_file(f)
+    mesh = fdem.Mesh.read(f)
+    assert {"base", "roof", "rock"} <= set(mesh.group_names())
+    assert len(mesh.element_sets["rock"]) == mesh.n_elements
+    assert np.allclose(mesh.points[mesh.nodes("base"), 1], 0.0)
+    assert np.allclose(mesh.points[mesh.nodes("roof"), 1], 1.0)
+    assert np.all(mesh.areas() > 0)
+    # and it runs: pressure on the roof, fixed base
+    model = fdem.Model(mesh, materials={"rock": ROCK}).fix("base").pressure("roof", 1e6)
+    fdem.Simulation(model).step(10)
+
+
+def test_read_vtu_written_by_meshio(tmp_path):
+    base = fdem.Mesh.rectangle(1.0, 1.0, 3, 3)
+    meshio.write(tmp_path / "m.vtu", meshio.Mesh(np.column_stack([base.points, np.zeros(base.n_nodes)]), [("triangle", base.triangles)]))
+    mesh = fdem.Mesh.read(tmp_path / "m.vtu")
+    assert mesh.n_elements == base.n_elements and np.allclose(mesh.points, base.points)
+
+
+def test_read_errors_name_the_file(tmp_path):
+    with pytest.raises(ValueError, match="missing.msh: cannot read mesh"):
+        fdem.Mesh.read(tmp_path / "missing.msh")
+    pts = np.array([[0, 0, 0], [1, 0, 1], [0, 1, 0]], dtype=float)
+    meshio.write(tmp_path / "bent.vtu", meshio.Mesh(pts, [("triangle", np.array([[0, 1, 2]]))]))
+    with pytest.raises(ValueError, match="node 1 has z = 1.0"):
+        fdem.Mesh.read(tmp_path / "bent.vtu")
+
+
+def test_output_series_opens_and_has_the_documented_fields(tmp_path):
+    mesh = fdem.Mesh.rectangle(2.0, 1.0, 6, 3)
+    model = fdem.Model(mesh, material=ROCK).set_gravity(0, -9.81).fix("bottom")
+    sim = fdem.Simulation(model, mass_damping=100.0)
+    sim.run(until=2e-3, output_every=5e-4, output=tmp_path, name="col", progress=False)
+    root = ET.parse(tmp_path / "col.pvd").getroot()
+    frames = list(root.iter("DataSet"))
+    times = [float(d.get("timestep")) for d in frames]
+    assert len(frames) == 5 and times == sorted(times) and times[0] == 0.0
+    last = meshio.read(tmp_path / frames[-1].get("file"))
+    assert last.points.shape == (mesh.n_nodes, 3)
+    for key in ("displacement", "velocity"):
+        assert last.point_data[key].shape == (mesh.n_nodes, 3)
+    for key, cols in (("stress", 4), ("principal_stress_1", None), ("active", None)):
+        arr = last.cell_data[key][0]
+        assert len(arr) == mesh.n_elements and (cols is None or arr.shape[1] == cols)
+    assert np.allclose(last.cell_data["stress"][0], sim.stress())
+    energy = np.genfromtxt(tmp_path / "col_energy.csv", delimiter=",", names=True)
+    assert len(energy) == 5 and "kinetic" in energy.dtype.names
+    # a second series with the same name is refused unless overwrite=True
+    with pytest.raises(FileExistsError, match="col.pvd already exists"):
+        fdem.Simulation(model).run(until=1e-4, output=tmp_path, name="col", progress=False)
+
+
+def test_run_continues_a_series_and_stops_at_until():
+    mesh = fdem.Mesh.rectangle(1.0, 1.0, 2, 2)
+    sim = fdem.Simulation(fdem.Model(mesh, material=ROCK).set_gravity(0, -9.81))
+    sim.run(until=1e-4, progress=False)
+    assert 1e-4 <= sim.time < 1e-4 + sim.time_step * 1.01
+    sim.run(until=2e-4, progress=False)
+    assert sim.time >= 2e-4
+
+
+def test_model_round_trips_through_pickle_and_file(tmp_path):
+    mesh = fdem.Mesh.rectangle(1.0, 1.0, 3, 3)
+    model = fdem.Model(mesh, material=ROCK).set_gravity(0, -9.81).fix("bottom").pressure("top", 1e5, amplitude=fdem.Amplitude.ramp(1e-3))
+    clone = pickle.loads(pickle.dumps(model))
+    path = tmp_path / "m.fdem"
+    model.save(path)
+    loaded = fdem.Model.load(path)
+    results = []
+    for m in (model, clone, loaded):
+        sim = fdem.Simulation(m, threads=1)
+        sim.step(50)
+        results.append(sim.positions())
+    assert np.array_equal(results[0], results[1]) and np.array_equal(results[0], results[2])
+    (tmp_path / "junk.fdem").write_bytes(b"not a model")
+    with pytest.raises(ValueError, match="junk.fdem: not a readable fdem model file"):
+        fdem.Model.load(tmp_path / "junk.fdem")
+
+
+def test_pressure_amplitude_scales_the_load():
+    """A ramped pressure on a free-floating block gives it momentum
+    ∫ p L dt = p L T/2 after a ramp of T (Newton's second law)."""
+    mesh = fdem.Mesh.rectangle(1.0, 1.0, 2, 2)
+    p, ramp = 1e5, 1e-4
+    model = fdem.Model(mesh, material=ROCK).pressure("top", p, amplitude=fdem.Amplitude.ramp(ramp))
+    sim = fdem.Simulation(model, dt=1e-6)
+    sim.step(100)
+    momentum = (sim.masses()[:, None] * sim.velocities()).sum(axis=0)
+    assert abs(momentum[1] - (-p * 1.0 * ramp / 2)) < 1e-3 * p * ramp
+    assert abs(momentum[0]) < 1e-9 * p * ramp
+
+
+def test_cli_info_and_run(tmp_path, capsys):
+    assert cli_main(["info"]) == 0
+    assert "fdem" in capsys.readouterr().out
+    mesh = fdem.Mesh.rectangle(1.0, 1.0, 2, 2)
+    path = tmp_path / "col.fdem"
+    fdem.Model(mesh, material=ROCK).set_gravity(0, -9.81).fix("bottom").save(path)
+    code = cli_main(["run", str(path), "--until", "1e-4", "--output-every", "5e-5", "--out", str(tmp_path / "out"), "--quiet"])
+    assert code == 0 and (tmp_path / "out" / "col.pvd").exists()
+    assert cli_main(["run", str(tmp_path / "missing.fdem"), "--until", "1"]) == 2
+
+
+def test_console_script_is_installed():
+    out = subprocess.run([sys.executable, "-m", "fdem.cli", "info"], capture_output=True, text=True, check=True)
+    assert out.stdout.startswith("fdem ")
+
+
+def test_stub_matches_the_native_module():
+    pytest.importorskip("mypy")
+    out = subprocess.run([sys.executable, "-m", "mypy.stubtest", "fdem._core"], capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout + out.stderr

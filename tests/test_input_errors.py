@@ -1,0 +1,141 @@
+"""Bad input raises ValueError naming the offending entity (issue 2, item 5);
+a run that breaks raises a SimulationError after valid output."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+import meshio
+import numpy as np
+import pytest
+from conftest import ROCK
+
+import fdem
+from fdem import _core
+
+SQUARE_PTS = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+SQUARE_TRI = np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def test_good_square_is_accepted():
+    assert fdem.Mesh(SQUARE_PTS, SQUARE_TRI).n_elements == 2
+
+
+@pytest.mark.parametrize(
+    "points, triangles, match",
+    [
+        (SQUARE_PTS, [[0, 1, 2], [0, 3, 2]], r"element 1 is clockwise"),
+        ([[0, 0], [1, 0], [2, 0]], [[0, 1, 2]], r"element 0 has zero area"),
+        ([[0, 0], [1, 0], [np.nan, 1], [0, 1]], SQUARE_TRI, r"points: entry 2 is NaN or infinite"),
+        ([[0, 0], [1, 0], [1, np.inf], [0, 1]], SQUARE_TRI, r"points: entry 2 is NaN or infinite"),
+        ([[0, 0], [1, 0], [1, 1], [0, 1], [5, 5]], SQUARE_TRI, r"node 4 belongs to no element"),
+        ([[0, 0], [1, 0], [1, 1], [0, 1], [1, 0]], [[0, 1, 2], [0, 2, 3], [4, 2, 0]], r"node 4 coincides with node 1"),
+        (SQUARE_PTS, [[0, 1, 7], [0, 2, 3]], r"element 0 refers to node 7"),
+        (SQUARE_PTS, [[0, 1, -2], [0, 2, 3]], r"id -2 is negative"),
+        (SQUARE_PTS, [[0, 1, 1], [0, 2, 3]], r"element 0 uses the same node twice"),
+        (np.zeros((4, 3)), SQUARE_TRI, r"points: expected shape \(n, 2\), got \(4, 3\)"),
+        (SQUARE_PTS, [[0, 1], [0, 2]], r"triangles: expected shape \(n, 3\)"),
+        (SQUARE_PTS, [[0, 1, 2.5], [0, 2, 3]], r"triangles: ids must be integers"),
+        ([["a", "b"]] * 4, SQUARE_TRI, r"points: expected numbers"),
+        (SQUARE_PTS, np.zeros((0, 3), dtype=int), r"no elements"),
+    ],
+)
+def test_bad_mesh_names_the_entity(points, triangles, match):
+    with pytest.raises(ValueError, match=match):
+        fdem.Mesh(points, triangles)
+
+
+def test_non_contiguous_and_other_dtypes_are_accepted():
+    pts = np.asfortranarray(np.column_stack([SQUARE_PTS, np.ones(4)]))[:, :2]
+    assert not pts.flags.c_contiguous
+    tri = SQUARE_TRI.astype(np.uint16)
+    mesh = fdem.Mesh(pts.astype(np.float32), tri)
+    assert mesh.points.dtype == np.float64 and mesh.triangles.dtype == np.int64
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"E": 0.0, "nu": 0.2, "rho": 1.0}, r"^E = 0.0 must be positive"),
+        ({"E": -1e9, "nu": 0.2, "rho": 1.0}, r"^E = "),
+        ({"E": 1e9, "nu": 0.5, "rho": 1.0}, r"^nu = 0.5 must lie in \(-1, 0.5\)"),
+        ({"E": 1e9, "nu": -1.0, "rho": 1.0}, r"^nu = "),
+        ({"E": 1e9, "nu": 0.2, "rho": 0.0}, r"^rho = 0.0 must be positive"),
+        ({"E": float("nan"), "nu": 0.2, "rho": 1.0}, r"^E = nan must be finite"),
+        ({"E": "stiff", "nu": 0.2, "rho": 1.0}, r"^E must be a number"),
+    ],
+)
+def test_bad_material_names_the_parameter(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        fdem.Elastic(**kwargs)
+
+
+def test_kernel_rejects_bad_material_rows_by_name():
+    arrays = fdem.Model(fdem.Mesh(SQUARE_PTS, SQUARE_TRI), material=ROCK).kernel_arrays()
+    arrays["materials"] = np.array([[2700.0, 1e9, 0.7]])
+    with pytest.raises(ValueError, match=r"material 0: material parameter nu = 0.7"):
+        _core.Simulation(**arrays)
+
+
+def test_unknown_group_name():
+    mesh = fdem.Mesh.rectangle(1.0, 1.0, 2, 2)
+    model = fdem.Model(mesh, material=ROCK)
+    with pytest.raises(ValueError, match=r"unknown group 'base'.*'bottom'"):
+        model.fix("base")
+    with pytest.raises(ValueError, match=r"unknown facet set 'roof'"):
+        model.pressure("roof", 1e6)
+    with pytest.raises(ValueError, match=r"unknown element set 'ore'"):
+        fdem.Model(mesh, materials={"ore": ROCK})
+
+
+def test_facet_set_off_the_boundary_is_named():
+    with pytest.raises(ValueError, match=r"facet set 'cut': entry 0 \(0, 2\) is not an edge on the mesh boundary"):
+        fdem.Mesh(SQUARE_PTS, SQUARE_TRI, facet_sets={"cut": [[0, 2]]})
+
+
+def test_bad_settings_name_the_parameter():
+    model = fdem.Model(fdem.Mesh(SQUARE_PTS, SQUARE_TRI), material=ROCK)
+    for kwargs, match in [
+        ({"safety": 1.5}, r"safety = 1.5"),
+        ({"dt": -1.0}, r"dt = -1.0 must be positive"),
+        ({"mass_damping": -2.0}, r"mass_damping = -2.0"),
+        ({"threads": 0}, r"threads = 0"),
+    ]:
+        with pytest.raises(ValueError, match=match):
+            fdem.Simulation(model, **kwargs)
+
+
+def test_initial_fields_are_checked():
+    model = fdem.Model(fdem.Mesh(SQUARE_PTS, SQUARE_TRI), material=ROCK)
+    with pytest.raises(ValueError, match=r"initial stress: expected shape \(4,\)"):
+        model.set_initial_stress((1.0, 2.0))
+    with pytest.raises(ValueError, match=r"initial velocity: entry 1 is NaN"):
+        model.set_initial_velocity(np.array([[0, 0], [np.nan, 0], [0, 0], [0, 0]]))
+
+
+def test_panic_becomes_runtime_error_not_panic_exception():
+    with pytest.raises(RuntimeError, match="internal error in the fdem kernel") as info:
+        _core._panic_selftest()
+    assert type(info.value) is RuntimeError
+
+
+def test_inverted_element_stops_after_valid_output(tmp_path):
+    """Crushing a block inverts an element: the run raises
+    InvertedElementError with the element, step and time, and every frame
+    in the .pvd index written before is complete and readable."""
+    mesh = fdem.Mesh.rectangle(1.0, 1.0, 4, 4)
+    model = fdem.Model(mesh, material=ROCK).fix("bottom")
+    model.prescribe_velocity("upper_left", vx=0.0, vy=-3000.0)
+    sim = fdem.Simulation(model)
+    with pytest.raises(fdem.InvertedElementError) as info:
+        sim.run(until=1.0, output_every=2e-5, output=tmp_path, progress=False)
+    err = info.value
+    assert 0 <= err.element < mesh.n_elements and err.step > 0 and err.time > 0
+    assert f"element {err.element} inverted" in str(err) and f"step {err.step}" in str(err)
+    tree = ET.parse(tmp_path / "fdem.pvd")
+    files = [d.get("file") for d in tree.iter("DataSet")]
+    assert len(files) >= 2
+    for f in files:
+        m = meshio.read(tmp_path / f)
+        assert len(m.cells[0].data) == mesh.n_elements
+    assert not list(tmp_path.glob("*.tmp"))
