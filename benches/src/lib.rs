@@ -26,7 +26,12 @@ pub fn block(nx: usize, ny: usize) -> ModelSpec {
             }
         }
     }
-    let roller = |node, fixed| Constraint { node, fixed, value: [0.0; 2], amplitude: None };
+    let roller = |node, fixed| Constraint {
+        node,
+        fixed,
+        value: [0.0; 2],
+        amplitude: None,
+    };
     let mut constraints = Vec::new();
     for i in 0..=nx {
         constraints.push(roller(id(i, 0), [false, true]));
@@ -36,13 +41,21 @@ pub fn block(nx: usize, ny: usize) -> ModelSpec {
         constraints.push(roller(id(nx, j), [true, false]));
     }
     let pressures = (0..nx)
-        .map(|i| PressureLoad { nodes: [id(i, ny), id(i + 1, ny)], pressure: 1e6, amplitude: None })
+        .map(|i| PressureLoad {
+            nodes: [id(i, ny), id(i + 1, ny)],
+            pressure: 1e6,
+            amplitude: None,
+        })
         .collect();
     let m = triangles.len();
     ModelSpec {
         points,
         triangles,
-        materials: vec![MaterialSpec { density: 3100.0, young: 60e9, poisson: 0.25 }],
+        materials: vec![MaterialSpec {
+            density: 3100.0,
+            young: 60e9,
+            poisson: 0.25,
+        }],
         element_material: vec![0; m],
         gravity: [0.0, -9.81],
         constraints,

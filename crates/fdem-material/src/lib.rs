@@ -7,10 +7,17 @@
 //!
 //! * [`elastic`]: isotropic linear elasticity in plane strain (`ε_zz = 0`,
 //!   `σ_zz` tracked).
+//! * [`mohr_coulomb_rankine`]: the paper's combined Mohr–Coulomb and Rankine
+//!   multi-surface plasticity with fracture-energy softening (appendices A–C).
+//! * [`principal`]: principal values with `σ_zz` as one of the three.
 
+mod dense;
 pub mod elastic;
+pub mod mohr_coulomb_rankine;
+pub mod principal;
 
 pub use elastic::Elastic;
+pub use mohr_coulomb_rankine::{CrackBand, Geometry, MohrCoulombRankine, PlasticState, Update};
 
 /// Errors in material parameters, naming the offending parameter.
 #[derive(Clone, Debug, PartialEq)]

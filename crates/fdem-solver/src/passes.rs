@@ -176,9 +176,15 @@ pub(crate) fn element_pass(
                 let last = sc.len() - 1;
                 let lane_elem = |l: usize| base + (j0 + l).min(last);
                 let conn: [[u32; 3]; LANES] = std::array::from_fn(|l| inp.conn[lane_elem(l)]);
-                let dm_inv = std::array::from_fn(|k| std::array::from_fn(|l| inp.reference[lane_elem(l)].dm_inv[k]));
-                let x: TriLanes = std::array::from_fn(|k| std::array::from_fn(|l| inp.x[conn[l][k / 2] as usize][k % 2]));
-                let v: TriLanes = std::array::from_fn(|k| std::array::from_fn(|l| inp.v[conn[l][k / 2] as usize][k % 2]));
+                let dm_inv = std::array::from_fn(|k| {
+                    std::array::from_fn(|l| inp.reference[lane_elem(l)].dm_inv[k])
+                });
+                let x: TriLanes = std::array::from_fn(|k| {
+                    std::array::from_fn(|l| inp.x[conn[l][k / 2] as usize][k % 2])
+                });
+                let v: TriLanes = std::array::from_fn(|k| {
+                    std::array::from_fn(|l| inp.v[conn[l][k / 2] as usize][k % 2])
+                });
                 let frames = corotational_frames(&dm_inv, &x, &v, inp.dt);
                 for l in 0..LANES.min(sc.len() - j0) {
                     let j = j0 + l;
@@ -198,14 +204,17 @@ pub(crate) fn element_pass(
                     let new = mat.elastic.trial(old, dh, inp.dt);
                     sc[j] = new;
                     let power = 0.5
-                        * ((old[0] + new[0]) * dh[0] + (old[1] + new[1]) * dh[1] + 2.0 * (old[3] + new[3]) * dh[2]);
+                        * ((old[0] + new[0]) * dh[0]
+                            + (old[1] + new[1]) * dh[1]
+                            + 2.0 * (old[3] + new[3]) * dh[2]);
                     let half_area = 0.5 * frames.twice_area_mid[l];
                     acc.internal += half_area * inp.dt * power;
                     let mut sigma = rotate(new, frames.cos_new[l], frames.sin_new[l]);
                     if inp.beta > 0.0 {
                         let d = frames.d(l);
                         let sv = mat.elastic.viscous(d, inp.beta);
-                        acc.viscous += half_area * inp.dt * (sv[0] * d[0] + sv[1] * d[1] + 2.0 * sv[3] * d[2]);
+                        acc.viscous +=
+                            half_area * inp.dt * (sv[0] * d[0] + sv[1] * d[1] + 2.0 * sv[3] * d[2]);
                         for k in 0..4 {
                             sigma[k] += sv[k];
                         }

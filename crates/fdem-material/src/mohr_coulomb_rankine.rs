@@ -1,0 +1,669 @@
+//! Combined Mohr–Coulomb and Rankine multi-surface plasticity with
+//! fracture-energy softening (paper appendices A–C, DESIGN §4.3).
+//!
+//! In principal space (`σ1 ≥ σ2 ≥ σ3`, tension positive, `σ_zz` one of the
+//! three) the surfaces are planes:
+//!
+//! * Mohr–Coulomb, perfectly plastic, non-associated (dilation `ψ`), written
+//!   as twice the paper's A.1:
+//!   `f_ij = σ_i (1 + sin φ) − σ_j (1 − sin φ) − 2 c cos φ` for the pairs
+//!   `P13` (main plane), `P12` (with P13: the right edge, `σ2 = σ3`) and
+//!   `P23` (with P13: the left edge, `σ1 = σ2`); all three: the apex.
+//!   Potentials `r_ij` are the same with `ψ`.
+//! * Rankine, associated: `g_k = σ_k − σ_y(κ)`, `σ_y = max(f_t − H κ, 0)`,
+//!   `H = h_c f_t² / (2 G_f)` (B.1–B.4). One fracturing strain `κ` is shared
+//!   by the tensile planes, its increment the sum of their multipliers
+//!   (the paper's κ1..κ3 by principal order have no consistent return once a
+//!   softened σ1 drops below σ2; DESIGN §4.3).
+//!
+//! For an active set `A` the return `σ = σ^tr − Σ Δγ_β C n_β`,
+//! `κ = κⁿ + Σ_{β∈R} Δγ_β` keeps every active function at zero: the linear
+//! system `G Δγ = f(σ^tr)` with `G_αβ = a_α · C n_β − H [α,β ∈ R]` (C.1–C.24
+//! in one form). Candidate sets are tried in order of increasing size and the
+//! first consistent one is taken: multipliers ≥ 0, every function ≤ 0,
+//! principal order kept. No iteration, no allocation.
+//!
+//! With softening and non-associated flow more than one set can be
+//! consistent (about 1% of random trials beyond both surfaces): typically a
+//! Mohr–Coulomb return that lands inside the tension cut-off, and one that
+//! also activates a tensile plane and softens down to the returned σ1. The
+//! rule, in order: fewer active planes first; among equally many,
+//! Mohr–Coulomb-only sets before sets with tensile planes (a crack only
+//! opens when the shear return alone cannot satisfy the cut-off); then the
+//! linear softening branch before the exhausted one. The tests check this
+//! rule against a brute-force enumeration of all 63 plane combinations.
+
+use crate::dense::{solve, MAX};
+use crate::elastic::Elastic;
+use crate::principal::{Order, Spectral};
+use crate::{check, ParameterError};
+
+/// How the crack-band width `h_c` of an element is measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CrackBand {
+    /// The element's width along σ1 when it first reaches `f_t`
+    /// (Oliver 1989); dissipates `G_f` per unit crack length within about 1%
+    /// on unstructured meshes. The default.
+    Oliver,
+    /// The paper's `√(4A/π)` (B.5a), blind to the crack direction: about 20%
+    /// too much dissipation for a band one element wide.
+    Equivalent,
+}
+
+/// The six planes, as bits of an active set.
+pub mod surface {
+    /// Mohr–Coulomb main plane (σ1, σ3).
+    pub const P13: u8 = 1;
+    /// Mohr–Coulomb plane (σ1, σ2).
+    pub const P12: u8 = 2;
+    /// Mohr–Coulomb plane (σ2, σ3).
+    pub const P23: u8 = 4;
+    /// Rankine plane on σ1.
+    pub const R1: u8 = 8;
+    /// Rankine plane on σ2.
+    pub const R2: u8 = 16;
+    /// Rankine plane on σ3.
+    pub const R3: u8 = 32;
+    /// All Mohr–Coulomb planes.
+    pub const MC: u8 = P13 | P12 | P23;
+    /// All Rankine planes.
+    pub const RANKINE: u8 = R1 | R2 | R3;
+    /// Bits in plane order.
+    pub const ALL: [u8; 6] = [P13, P12, P23, R1, R2, R3];
+}
+use surface::*;
+
+/// The candidate active sets: main plane; σ1 plane; left edge; right edge;
+/// σ1+σ2 planes; main + σ1 (C.10); apex; tensile corner (C.4); right edge +
+/// σ1 (C.13); left edge + σ1 + σ2 (C.19).
+pub const CANDIDATES: [u8; 10] = [
+    P13,
+    R1,
+    P13 | P23,
+    P13 | P12,
+    R1 | R2,
+    P13 | R1,
+    P13 | P12 | P23,
+    R1 | R2 | R3,
+    P13 | P12 | R1,
+    P13 | P23 | R1 | R2,
+];
+
+/// The order in which `(set, exhausted branch)` returns are tried: by number
+/// of planes, then Mohr–Coulomb-only before tensile, then the linear
+/// softening branch before the exhausted one (module notes).
+pub const RETURN_ORDER: [(u8, bool); 16] = [
+    (P13, false),
+    (R1, false),
+    (R1, true),
+    (P13 | P23, false),
+    (P13 | P12, false),
+    (R1 | R2, false),
+    (P13 | R1, false),
+    (R1 | R2, true),
+    (P13 | R1, true),
+    (P13 | P12 | P23, false),
+    (R1 | R2 | R3, false),
+    (P13 | P12 | R1, false),
+    (R1 | R2 | R3, true),
+    (P13 | P12 | R1, true),
+    (P13 | P23 | R1 | R2, false),
+    (P13 | P23 | R1 | R2, true),
+];
+
+/// The material parameters, checked.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MohrCoulombRankine {
+    /// Elastic constants.
+    pub elastic: Elastic,
+    /// Cohesion `c` (Pa).
+    pub cohesion: f64,
+    /// Friction angle `φ` (rad).
+    pub friction: f64,
+    /// Dilation angle `ψ` (rad).
+    pub dilation: f64,
+    /// Tensile strength `f_t` (Pa).
+    pub tensile_strength: f64,
+    /// Fracture energy `G_f` (N/m = J/m²).
+    pub fracture_energy: f64,
+    /// Crack-band rule.
+    pub crack_band: CrackBand,
+    sin_phi: f64,
+    cos_phi: f64,
+    sin_psi: f64,
+}
+
+/// What the law remembers per material point.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PlasticState {
+    /// Fracturing strain `κ` (−), the shared Rankine hardening variable.
+    pub kappa: f64,
+    /// Crack-band width `h_c` (m); zero until the point first reaches `f_t`.
+    pub crack_band: f64,
+    /// Direction of σ1 in the co-rotational frame at the last tensile
+    /// plastic step (rad from x): the rotating crack's normal.
+    pub direction: f64,
+    /// Plastic strain `[xx, yy, zz, xy]` (co-rotational, tensor shear).
+    pub plastic_strain: [f64; 4],
+    /// Accumulated equivalent plastic strain `Σ √(2/3 Δεᵖ:Δεᵖ)`.
+    pub equivalent_plastic_strain: f64,
+}
+
+/// The shape an element gives the law for its crack band: its two edge
+/// vectors from vertex 0 in the co-rotational (reference-oriented) frame (m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Geometry {
+    /// `X1 − X0`.
+    pub e1: [f64; 2],
+    /// `X2 − X0`.
+    pub e2: [f64; 2],
+}
+
+impl Geometry {
+    /// Width of the triangle measured along the direction at `angle` (m).
+    pub fn width_along(&self, angle: f64) -> f64 {
+        let (c, s) = (angle.cos(), angle.sin());
+        let p1 = self.e1[0] * c + self.e1[1] * s;
+        let p2 = self.e2[0] * c + self.e2[1] * s;
+        0.0f64.max(p1).max(p2) - 0.0f64.min(p1).min(p2)
+    }
+
+    /// Area (m²).
+    pub fn area(&self) -> f64 {
+        0.5 * (self.e1[0] * self.e2[1] - self.e1[1] * self.e2[0]).abs()
+    }
+
+    /// Longest edge (m): the largest width over all directions.
+    pub fn diameter(&self) -> f64 {
+        let d = [self.e2[0] - self.e1[0], self.e2[1] - self.e1[1]];
+        self.e1[0]
+            .hypot(self.e1[1])
+            .max(self.e2[0].hypot(self.e2[1]))
+            .max(d[0].hypot(d[1]))
+    }
+}
+
+/// The result of one update.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Update {
+    /// New co-rotational stress `[xx, yy, zz, xy]` (Pa).
+    pub stress: [f64; 4],
+    /// Active set (bits of [`surface`]); 0 for an elastic step.
+    pub active: u8,
+    /// Mohr–Coulomb plastic dissipation of the step (J/m³).
+    pub plastic_dissipation: f64,
+    /// Tensile (fracture) dissipation of the step (J/m³).
+    pub fracture_dissipation: f64,
+}
+
+/// A return in principal space, before it is accepted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrincipalReturn {
+    /// Returned principal stresses (sorted as the trial was).
+    pub stress: [f64; 3],
+    /// Multipliers per plane, in [`surface::ALL`] order.
+    pub multipliers: [f64; 6],
+    /// New fracturing strain.
+    pub kappa: f64,
+    /// Tensile strength at `kappa`.
+    pub strength: f64,
+}
+
+impl MohrCoulombRankine {
+    /// Checked parameters. Angles in radians: `0 ≤ ψ ≤ φ < π/2`; `c ≥ 0`,
+    /// `0 < f_t ≤ c cot φ` (the tension cut-off inside the Mohr–Coulomb apex),
+    /// `G_f > 0`. Errors name the parameter as the Python API spells it.
+    pub fn new(
+        elastic: Elastic,
+        cohesion: f64,
+        friction: f64,
+        dilation: f64,
+        tensile_strength: f64,
+        fracture_energy: f64,
+        crack_band: CrackBand,
+    ) -> Result<Self, ParameterError> {
+        let quarter = std::f64::consts::FRAC_PI_2;
+        check("c", cohesion, cohesion >= 0.0, "cohesion must be >= 0")?;
+        check(
+            "phi",
+            friction.to_degrees(),
+            (0.0..quarter).contains(&friction),
+            "friction angle must lie in [0, 90) degrees",
+        )?;
+        check(
+            "psi",
+            dilation.to_degrees(),
+            (0.0..quarter).contains(&dilation),
+            "dilation angle must lie in [0, 90) degrees",
+        )?;
+        check(
+            "psi",
+            dilation.to_degrees(),
+            dilation <= friction,
+            "dilation angle must not exceed the friction angle",
+        )?;
+        check(
+            "ft",
+            tensile_strength,
+            tensile_strength > 0.0,
+            "tensile strength must be positive",
+        )?;
+        let apex = if friction > 0.0 {
+            cohesion / friction.tan()
+        } else {
+            f64::INFINITY
+        };
+        check(
+            "ft",
+            tensile_strength,
+            tensile_strength <= apex * (1.0 + 1e-12),
+            &format!("tensile strength must not exceed c*cot(phi) = {apex:.6e} Pa (the Mohr-Coulomb apex)"),
+        )?;
+        check(
+            "Gf",
+            fracture_energy,
+            fracture_energy > 0.0,
+            "fracture energy must be positive",
+        )?;
+        Ok(Self {
+            elastic,
+            cohesion,
+            friction,
+            dilation,
+            tensile_strength,
+            fracture_energy,
+            crack_band,
+            sin_phi: friction.sin(),
+            cos_phi: friction.cos(),
+            sin_psi: dilation.sin(),
+        })
+    }
+
+    /// Uniaxial compressive strength `2 c cos φ / (1 − sin φ)` (Pa).
+    pub fn ucs(&self) -> f64 {
+        2.0 * self.cohesion * self.cos_phi / (1.0 - self.sin_phi)
+    }
+
+    /// `N_φ = (1 + sin φ) / (1 − sin φ)`.
+    pub fn n_phi(&self) -> f64 {
+        (1.0 + self.sin_phi) / (1.0 - self.sin_phi)
+    }
+
+    /// `N_ψ = (1 + sin ψ) / (1 − sin ψ)`.
+    pub fn n_psi(&self) -> f64 {
+        (1.0 + self.sin_psi) / (1.0 - self.sin_psi)
+    }
+
+    /// Largest element size without snap-back, `2 E' G_f / f_t²` (m), with
+    /// the plane-strain modulus `E' = E / (1 − ν²)`.
+    pub fn snap_back_size(&self) -> f64 {
+        2.0 * self.elastic.plane_strain_modulus() * self.fracture_energy
+            / (self.tensile_strength * self.tensile_strength)
+    }
+
+    /// Softening modulus `H = h_c f_t² / (2 G_f)` (Pa) for a band `h_c` (m).
+    pub fn softening_modulus(&self, crack_band: f64) -> f64 {
+        crack_band * self.tensile_strength * self.tensile_strength / (2.0 * self.fracture_energy)
+    }
+
+    /// Failure factor `F = κ / ε_c^f = κ H / f_t` (eq. 2.21); 1 means fully
+    /// softened, 0 before the first crack.
+    pub fn failure_factor(&self, state: &PlasticState) -> f64 {
+        if state.crack_band > 0.0 {
+            state.kappa * self.softening_modulus(state.crack_band) / self.tensile_strength
+        } else {
+            0.0
+        }
+    }
+
+    /// Tensile strength and effective softening modulus at `kappa` for a
+    /// band `crack_band`: `(max(f_t − Hκ, 0), H or 0 once fully softened)`.
+    fn strength(&self, kappa: f64, crack_band: f64) -> (f64, f64) {
+        let h = self.softening_modulus(crack_band);
+        let s = self.tensile_strength - h * kappa;
+        if s > 0.0 {
+            (s, h)
+        } else {
+            (0.0, 0.0)
+        }
+    }
+
+    /// The six yield functions at sorted principal stresses `s` and tensile
+    /// strength `sy`, in [`surface::ALL`] order (Pa; the MC ones doubled as
+    /// in the module notes).
+    pub fn yield_functions(&self, s: [f64; 3], sy: f64) -> [f64; 6] {
+        let (sp, k) = (self.sin_phi, 2.0 * self.cohesion * self.cos_phi);
+        let mc = |i: usize, j: usize| s[i] * (1.0 + sp) - s[j] * (1.0 - sp) - k;
+        [
+            mc(0, 2),
+            mc(0, 1),
+            mc(1, 2),
+            s[0] - sy,
+            s[1] - sy,
+            s[2] - sy,
+        ]
+    }
+
+    /// Gradient `a` of the yield function and `n` of the potential of plane
+    /// `bit` in principal space.
+    pub fn gradients(&self, bit: u8) -> ([f64; 3], [f64; 3]) {
+        let (sp, ss) = (self.sin_phi, self.sin_psi);
+        let pair = |i: usize, j: usize, s: f64| {
+            let mut v = [0.0; 3];
+            v[i] = 1.0 + s;
+            v[j] = -(1.0 - s);
+            v
+        };
+        match bit {
+            P13 => (pair(0, 2, sp), pair(0, 2, ss)),
+            P12 => (pair(0, 1, sp), pair(0, 1, ss)),
+            P23 => (pair(1, 2, sp), pair(1, 2, ss)),
+            R1 => ([1.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
+            R2 => ([0.0, 1.0, 0.0], [0.0, 1.0, 0.0]),
+            _ => ([0.0, 0.0, 1.0], [0.0, 0.0, 1.0]),
+        }
+    }
+
+    /// `C n` in principal space: `λ (n1 + n2 + n3) + 2G n_k`.
+    fn c_times(&self, n: [f64; 3]) -> [f64; 3] {
+        let l = self.elastic.lambda * (n[0] + n[1] + n[2]);
+        let g = 2.0 * self.elastic.mu;
+        [l + g * n[0], l + g * n[1], l + g * n[2]]
+    }
+
+    /// The return to the planes of `active` from sorted trial principal
+    /// stresses `s`, fracturing strain `kappa` and band `crack_band`, on one
+    /// branch of the softening law: `exhausted = false` for linear softening
+    /// (the strength must stay ≥ 0), `true` for the part past full softening
+    /// (zero strength; valid only if the step's `Δκ` reaches `f_t/H`).
+    /// `None` when the branch does not apply or its system is singular. Not
+    /// checked for consistency.
+    pub fn principal_return(
+        &self,
+        s: [f64; 3],
+        active: u8,
+        kappa: f64,
+        crack_band: f64,
+        exhausted: bool,
+    ) -> Option<PrincipalReturn> {
+        let (sy, h) = self.strength(kappa, crack_band);
+        if !exhausted {
+            return self
+                .solve_set(s, active, kappa, sy, h)
+                .filter(|r| r.strength >= 0.0);
+        }
+        if h == 0.0 || active & RANKINE == 0 {
+            return None; // already exhausted: the linear branch covers it
+        }
+        let kappa_max = self.tensile_strength / h;
+        self.solve_set(s, active, kappa, 0.0, 0.0)
+            .filter(|r| r.kappa >= kappa_max * (1.0 - 1e-12))
+            .map(|mut r| {
+                r.strength = 0.0;
+                r
+            })
+    }
+
+    fn solve_set(
+        &self,
+        s: [f64; 3],
+        active: u8,
+        kappa: f64,
+        sy: f64,
+        h: f64,
+    ) -> Option<PrincipalReturn> {
+        if active == P13 | P23 | R1 | R2 {
+            return self.left_edge_tensile_corner(s, kappa, sy, h);
+        }
+        let mut bits = [0u8; MAX];
+        let mut n = 0;
+        for b in ALL {
+            if active & b != 0 {
+                if n == MAX {
+                    return None;
+                }
+                bits[n] = b;
+                n += 1;
+            }
+        }
+        let f = self.yield_functions(s, sy);
+        let mut g = [[0.0; MAX]; MAX];
+        let mut rhs = [0.0; MAX];
+        let mut cn = [[0.0; 3]; MAX];
+        for (j, &b) in bits[..n].iter().enumerate() {
+            cn[j] = self.c_times(self.gradients(b).1);
+        }
+        for (i, &bi) in bits[..n].iter().enumerate() {
+            let (a, _) = self.gradients(bi);
+            rhs[i] = f[ALL.iter().position(|&x| x == bi).unwrap_or(0)];
+            for (j, &bj) in bits[..n].iter().enumerate() {
+                g[i][j] = a[0] * cn[j][0] + a[1] * cn[j][1] + a[2] * cn[j][2];
+                if bi & RANKINE != 0 && bj & RANKINE != 0 {
+                    g[i][j] -= h;
+                }
+            }
+        }
+        let x = solve(g, rhs, n)?;
+        let mut out = s;
+        let mut multipliers = [0.0; 6];
+        let mut dk = 0.0;
+        for (j, &b) in bits[..n].iter().enumerate() {
+            for k in 0..3 {
+                out[k] -= x[j] * cn[j][k];
+            }
+            multipliers[ALL.iter().position(|&a| a == b).unwrap_or(0)] = x[j];
+            if b & RANKINE != 0 {
+                dk += x[j];
+            }
+        }
+        Some(PrincipalReturn {
+            stress: out,
+            multipliers,
+            kappa: kappa + dk,
+            strength: sy - h * dk,
+        })
+    }
+
+    /// The corner of C.19: left edge (P13 + P23) with the σ1 and σ2 planes.
+    /// With σ1 = σ2 = σ_y the two Mohr–Coulomb conditions coincide, so the
+    /// four-plane system is singular: the stress is unique, the split of the
+    /// Mohr–Coulomb multiplier between `n13` and `n23` is not. Since
+    /// `n23 = n13 − (1 + sin ψ)(e1 − e2)`, moving `b` from P13 to P23 changes
+    /// the σ1 and σ2 multipliers by `±b (1 + sin ψ)` and leaves the plastic
+    /// strain and κ unchanged. Solve P13 + R1 + R2, then take the middle of
+    /// the range of `b` that keeps all four multipliers non-negative.
+    fn left_edge_tensile_corner(
+        &self,
+        s: [f64; 3],
+        kappa: f64,
+        sy: f64,
+        h: f64,
+    ) -> Option<PrincipalReturn> {
+        let mut r = self.solve_set(s, P13 | R1 | R2, kappa, sy, h)?;
+        let (total, c0, d0) = (r.multipliers[0], r.multipliers[3], r.multipliers[4]);
+        let k = 1.0 + self.sin_psi;
+        let lo = 0.0f64.max(-c0 / k);
+        let hi = total.min(d0 / k);
+        let b = if lo <= hi { 0.5 * (lo + hi) } else { 0.0 };
+        r.multipliers[0] = total - b;
+        r.multipliers[2] = b;
+        r.multipliers[3] = c0 + b * k;
+        r.multipliers[4] = d0 - b * k;
+        Some(r)
+    }
+
+    /// Whether a return is admissible: multipliers ≥ 0, every yield
+    /// function ≤ 0 and the principal order kept, within `tol` (Pa).
+    pub fn is_consistent(&self, r: &PrincipalReturn, tol: f64) -> bool {
+        let g2 = 2.0 * self.elastic.mu;
+        if r.multipliers
+            .iter()
+            .any(|&x| x * g2 < -tol || !x.is_finite())
+        {
+            return false;
+        }
+        let s = r.stress;
+        if s[0] < s[1] - tol || s[1] < s[2] - tol {
+            return false;
+        }
+        self.yield_functions(s, r.strength)
+            .iter()
+            .all(|&f| f <= tol)
+    }
+
+    /// Stress tolerance of the consistency checks for trial `s` (Pa).
+    pub fn tolerance(&self, s: [f64; 3]) -> f64 {
+        1e-9 * (s[0].abs().max(s[2].abs()) + self.cohesion + self.tensile_strength)
+    }
+
+    /// The elastic-plastic update of one material point.
+    ///
+    /// `old` is the co-rotational stress at the start of the step, `trial`
+    /// the elastic trial `old + C : D̂ Δt` (Pa); `geometry` gives the crack
+    /// band when the point first reaches `f_t`. Updates `state` and returns
+    /// the new stress with the dissipation of the step, measured as
+    /// `½ (σⁿ + σⁿ⁺¹) : Δεᵖ`, which makes the internal work equal to the
+    /// change of elastic energy plus the dissipation exactly.
+    pub fn update(
+        &self,
+        old: [f64; 4],
+        trial: [f64; 4],
+        state: &mut PlasticState,
+        geometry: &Geometry,
+    ) -> Update {
+        let sp = Spectral::of(trial);
+        let (s, order) = Order::sort(sp.a, sp.b, trial[2]);
+        let tol = self.tolerance(s);
+        // before the first crack κ = 0 and the strength is f_t whatever the band
+        let band = if state.crack_band > 0.0 {
+            state.crack_band
+        } else {
+            1.0
+        };
+        let f = self.yield_functions(s, self.strength(state.kappa, band).0);
+        if f[0] <= tol && f[3] <= tol {
+            return Update {
+                stress: trial,
+                active: 0,
+                plastic_dissipation: 0.0,
+                fracture_dissipation: 0.0,
+            };
+        }
+        if state.crack_band == 0.0 && f[3] > tol {
+            state.crack_band = match self.crack_band {
+                CrackBand::Oliver => geometry.width_along(sp.angle()),
+                CrackBand::Equivalent => (4.0 * geometry.area() / std::f64::consts::PI).sqrt(),
+            };
+        }
+        let band = if state.crack_band > 0.0 {
+            state.crack_band
+        } else {
+            1.0
+        };
+        let mut chosen: Option<(u8, PrincipalReturn)> = None;
+        for &(set, exhausted) in &RETURN_ORDER {
+            if set & RANKINE != 0 && state.crack_band == 0.0 {
+                continue;
+            }
+            if let Some(r) = self.principal_return(s, set, state.kappa, band, exhausted) {
+                if self.is_consistent(&r, tol) {
+                    chosen = Some((set, r));
+                    break;
+                }
+            }
+        }
+        let Some((active, r)) = chosen.or_else(|| self.least_violating(s, state, band)) else {
+            return Update {
+                stress: trial,
+                active: 0,
+                plastic_dissipation: 0.0,
+                fracture_dissipation: 0.0,
+            };
+        };
+        // plastic strain increments in principal space, split MC / tensile
+        let mut de_mc = [0.0; 3];
+        let mut de_t = [0.0; 3];
+        for (k, &b) in ALL.iter().enumerate() {
+            let x = r.multipliers[k];
+            if x == 0.0 {
+                continue;
+            }
+            let (_, n) = self.gradients(b);
+            let target = if b & RANKINE != 0 {
+                &mut de_t
+            } else {
+                &mut de_mc
+            };
+            for i in 0..3 {
+                target[i] += x * n[i];
+            }
+        }
+        let [a, b, zz] = order.unsort(r.stress);
+        let stress = sp.compose(a, b, zz);
+        let to_tensor = |d: [f64; 3]| {
+            let [a, b, zz] = order.unsort(d);
+            sp.compose(a, b, zz)
+        };
+        let (e_mc, e_t) = (to_tensor(de_mc), to_tensor(de_t));
+        let mid = [
+            0.5 * (old[0] + stress[0]),
+            0.5 * (old[1] + stress[1]),
+            0.5 * (old[2] + stress[2]),
+            0.5 * (old[3] + stress[3]),
+        ];
+        let work =
+            |e: [f64; 4]| mid[0] * e[0] + mid[1] * e[1] + mid[2] * e[2] + 2.0 * mid[3] * e[3];
+        let mut total = [0.0; 4];
+        for k in 0..4 {
+            total[k] = e_mc[k] + e_t[k];
+            state.plastic_strain[k] += total[k];
+        }
+        let sq = de_mc
+            .iter()
+            .zip(&de_t)
+            .map(|(m, t)| (m + t) * (m + t))
+            .sum::<f64>();
+        state.equivalent_plastic_strain += (2.0 / 3.0 * sq).sqrt();
+        if active & RANKINE != 0 {
+            state.kappa = r.kappa;
+            state.direction = sp.angle();
+        }
+        Update {
+            stress,
+            active,
+            plastic_dissipation: work(e_mc),
+            fracture_dissipation: work(e_t),
+        }
+    }
+
+    /// Fallback when no candidate is consistent within tolerance (a round-off
+    /// corner case): the candidate with non-negative multipliers and the
+    /// smallest violation.
+    fn least_violating(
+        &self,
+        s: [f64; 3],
+        state: &PlasticState,
+        band: f64,
+    ) -> Option<(u8, PrincipalReturn)> {
+        let mut best: Option<(f64, u8, PrincipalReturn)> = None;
+        for &(set, exhausted) in &RETURN_ORDER {
+            if set & RANKINE != 0 && state.crack_band == 0.0 {
+                continue;
+            }
+            let Some(r) = self.principal_return(s, set, state.kappa, band, exhausted) else {
+                continue;
+            };
+            if r.multipliers.iter().any(|&x| x < 0.0) {
+                continue;
+            }
+            let v = self
+                .yield_functions(r.stress, r.strength)
+                .iter()
+                .fold(0.0f64, |m, &f| m.max(f));
+            if best.is_none_or(|(bv, _, _)| v < bv) {
+                best = Some((v, set, r));
+            }
+        }
+        best.map(|(_, set, r)| (set, r))
+    }
+}

@@ -1,0 +1,110 @@
+//! Principal values of a plane-strain stress `[xx, yy, zz, xy]`, with `σ_zz`
+//! as one of the three, sorted `σ1 ≥ σ2 ≥ σ3`, and the way back.
+
+/// The spectral form of `[xx, yy, zz, xy]`: in-plane principal values
+/// `a ≥ b` with the direction of `a` given by `(cos 2θ, sin 2θ)`, plus `zz`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spectral {
+    /// Larger in-plane principal value.
+    pub a: f64,
+    /// Smaller in-plane principal value.
+    pub b: f64,
+    /// `cos 2θ` of the direction of `a` (1 when `a = b`).
+    pub cos2: f64,
+    /// `sin 2θ` of the direction of `a`.
+    pub sin2: f64,
+}
+
+impl Spectral {
+    /// Decomposes the in-plane part of `t`.
+    #[inline]
+    pub fn of(t: [f64; 4]) -> Self {
+        let mean = 0.5 * (t[0] + t[1]);
+        let half = 0.5 * (t[0] - t[1]);
+        let r = half.hypot(t[3]);
+        let (cos2, sin2) = if r > 0.0 {
+            (half / r, t[3] / r)
+        } else {
+            (1.0, 0.0)
+        };
+        Self {
+            a: mean + r,
+            b: mean - r,
+            cos2,
+            sin2,
+        }
+    }
+
+    /// The in-plane tensor with principal values `a`, `b` on these
+    /// directions, and `zz`, as `[xx, yy, zz, xy]`.
+    #[inline]
+    pub fn compose(&self, a: f64, b: f64, zz: f64) -> [f64; 4] {
+        let (m, h) = (0.5 * (a + b), 0.5 * (a - b));
+        [m + h * self.cos2, m - h * self.cos2, zz, h * self.sin2]
+    }
+
+    /// Angle θ (rad, in `(−π/2, π/2]`) of the direction of `a` from x.
+    #[inline]
+    pub fn angle(&self) -> f64 {
+        0.5 * self.sin2.atan2(self.cos2)
+    }
+}
+
+/// Where each sorted principal value comes from: `slot[k]` is 0 for the
+/// in-plane `a`, 1 for the in-plane `b`, 2 for `zz`, for `σ_{k+1}`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Order {
+    /// Source of `σ1, σ2, σ3`.
+    pub slot: [u8; 3],
+}
+
+impl Order {
+    /// Sorts `[a, b, zz]` (with `a ≥ b`) descending.
+    #[inline]
+    pub fn sort(a: f64, b: f64, zz: f64) -> ([f64; 3], Self) {
+        if zz >= a {
+            ([zz, a, b], Order { slot: [2, 0, 1] })
+        } else if zz >= b {
+            ([a, zz, b], Order { slot: [0, 2, 1] })
+        } else {
+            ([a, b, zz], Order { slot: [0, 1, 2] })
+        }
+    }
+
+    /// Puts sorted values back as `[a, b, zz]`.
+    #[inline]
+    pub fn unsort(&self, s: [f64; 3]) -> [f64; 3] {
+        let mut out = [0.0; 3];
+        for k in 0..3 {
+            out[self.slot[k] as usize] = s[k];
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip() {
+        let t = [3.0, -2.0, 0.5, 1.5];
+        let s = Spectral::of(t);
+        let back = s.compose(s.a, s.b, t[2]);
+        for k in 0..4 {
+            assert!((back[k] - t[k]).abs() < 1e-14);
+        }
+        let (sorted, order) = Order::sort(s.a, s.b, t[2]);
+        assert!(sorted[0] >= sorted[1] && sorted[1] >= sorted[2]);
+        assert_eq!(order.unsort(sorted), [s.a, s.b, t[2]]);
+    }
+
+    #[test]
+    fn angle_of_major_direction() {
+        let th: f64 = 0.4;
+        let (c, s) = (th.cos(), th.sin());
+        // uniaxial 1 along θ
+        let t = [c * c, s * s, 0.0, c * s];
+        assert!((Spectral::of(t).angle() - th).abs() < 1e-14);
+    }
+}

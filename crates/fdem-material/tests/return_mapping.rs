@@ -1,0 +1,443 @@
+//! Every return region of the Mohr–Coulomb + Rankine law against an
+//! independent brute-force solver: try every combination of the six planes,
+//! solve each with nalgebra, keep the consistent ones. The law's answer must
+//! be one of them. The brute force below is written from the paper's
+//! yield functions (A.1, B.1) directly, not from the law's code.
+
+use fdem_material::mohr_coulomb_rankine::{surface, CANDIDATES, RETURN_ORDER};
+use fdem_material::principal::{Order, Spectral};
+use fdem_material::{CrackBand, Elastic, Geometry, MohrCoulombRankine, PlasticState};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+const DEG: f64 = std::f64::consts::PI / 180.0;
+
+/// A tiny deterministic generator (xorshift), so failures reproduce.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+/// The paper's Table 1 rock with a chosen band.
+fn palabora() -> MohrCoulombRankine {
+    let e = Elastic::new(60e9, 0.25).unwrap();
+    MohrCoulombRankine::new(e, 8e6, 55.0 * DEG, 9.0 * DEG, 1e6, 70.0, CrackBand::Oliver).unwrap()
+}
+
+struct Brute {
+    e: f64,
+    nu: f64,
+    c: f64,
+    phi: f64,
+    psi: f64,
+    h: f64,
+}
+
+impl Brute {
+    /// Yield function value and gradients of plane `k` (0..6: (1,3), (1,2),
+    /// (2,3) Mohr–Coulomb as ½(σi − σj) + ½(σi + σj) sin φ − c cos φ, then
+    /// σ1, σ2, σ3 − σy), and its potential gradient.
+    fn plane(&self, k: usize, s: &Vector3<f64>, sy: f64) -> (f64, Vector3<f64>, Vector3<f64>) {
+        let mc = |i: usize, j: usize| {
+            let f = 0.5 * (s[i] - s[j]) + 0.5 * (s[i] + s[j]) * self.phi.sin()
+                - self.c * self.phi.cos();
+            let mut a = Vector3::zeros();
+            a[i] = 0.5 + 0.5 * self.phi.sin();
+            a[j] = -0.5 + 0.5 * self.phi.sin();
+            let mut n = Vector3::zeros();
+            n[i] = 0.5 + 0.5 * self.psi.sin();
+            n[j] = -0.5 + 0.5 * self.psi.sin();
+            (f, a, n)
+        };
+        match k {
+            0 => mc(0, 2),
+            1 => mc(0, 1),
+            2 => mc(1, 2),
+            _ => {
+                let mut a = Vector3::zeros();
+                a[k - 3] = 1.0;
+                (s[k - 3] - sy, a, a)
+            }
+        }
+    }
+
+    fn elasticity(&self) -> Matrix3<f64> {
+        let l = self.e * self.nu / ((1.0 + self.nu) * (1.0 - 2.0 * self.nu));
+        let g = self.e / (2.0 * (1.0 + self.nu));
+        Matrix3::from_fn(|i, j| l + if i == j { 2.0 * g } else { 0.0 })
+    }
+
+    /// All consistent returns from trial `s` with fracturing strain `kappa`,
+    /// as (mask, exhausted branch, stress).
+    fn consistent(
+        &self,
+        s: Vector3<f64>,
+        kappa: f64,
+        ft: f64,
+        tol: f64,
+    ) -> Vec<(u8, bool, Vector3<f64>)> {
+        let c = self.elasticity();
+        let g2 = self.e / (1.0 + self.nu);
+        let mut out = Vec::new();
+        for mask in 1u8..64 {
+            let planes: Vec<usize> = (0..6).filter(|k| mask & (1 << k) != 0).collect();
+            let n = planes.len();
+            // strength path: linear softening; if that ends below zero, zero strength
+            // linear softening while strength remains; once exhausted (or
+            // exhausted within this step) zero strength and no softening
+            let exhausted_before = ft - self.h * kappa <= 0.0;
+            for floor in [false, true] {
+                if floor && exhausted_before {
+                    continue;
+                }
+                let (h, sy0) = if floor || exhausted_before {
+                    (0.0, 0.0)
+                } else {
+                    (self.h, ft - self.h * kappa)
+                };
+                let mut g = DMatrix::zeros(n, n);
+                let mut rhs = DVector::zeros(n);
+                for (i, &pi) in planes.iter().enumerate() {
+                    let (f, a, _) = self.plane(pi, &s, sy0);
+                    rhs[i] = f;
+                    for (j, &pj) in planes.iter().enumerate() {
+                        let (_, _, nb) = self.plane(pj, &s, sy0);
+                        g[(i, j)] = a.dot(&(c * nb)) - if pi >= 3 && pj >= 3 { h } else { 0.0 };
+                    }
+                }
+                // a rank-deficient system (coinciding conditions) has a line of
+                // multipliers: accept it if some point of the line is >= 0
+                let svd = g.clone().svd(true, true);
+                let smax = svd.singular_values.max();
+                let rank = svd
+                    .singular_values
+                    .iter()
+                    .filter(|&&v| v > 1e-10 * smax)
+                    .count();
+                if rank + 1 < n || smax == 0.0 {
+                    continue;
+                }
+                let Ok(mut x) = svd.solve(&rhs, 1e-10 * smax) else {
+                    continue;
+                };
+                if x.iter().any(|v| !v.is_finite())
+                    || (&g * &x - &rhs).norm() > 1e-6 * rhs.norm().max(1.0)
+                {
+                    continue;
+                }
+                if rank + 1 == n {
+                    let vt = svd.v_t.as_ref().unwrap();
+                    let k = (0..n)
+                        .min_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]))
+                        .unwrap();
+                    let v: Vec<f64> = (0..n).map(|j| vt[(k, j)]).collect();
+                    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+                    for j in 0..n {
+                        if v[j].abs() < 1e-12 {
+                            continue;
+                        }
+                        let t = -x[j] / v[j];
+                        if v[j] > 0.0 {
+                            lo = lo.max(t);
+                        } else {
+                            hi = hi.min(t);
+                        }
+                    }
+                    if lo > hi {
+                        continue;
+                    }
+                    let t = if lo.is_finite() && hi.is_finite() {
+                        0.5 * (lo + hi)
+                    } else if lo.is_finite() {
+                        lo
+                    } else {
+                        hi.min(0.0)
+                    };
+                    for j in 0..n {
+                        x[j] += t * v[j];
+                    }
+                }
+                let mut new = s;
+                let mut dk = 0.0;
+                for (j, &pj) in planes.iter().enumerate() {
+                    let (_, _, nb) = self.plane(pj, &s, sy0);
+                    new -= x[j] * (c * nb);
+                    if pj >= 3 {
+                        dk += x[j];
+                    }
+                }
+                let sy = sy0 - h * dk;
+                if sy < 0.0 {
+                    continue;
+                }
+                // the exhausted branch needs the step to soften all the way
+                if floor
+                    && (self.h == 0.0
+                        || kappa + dk < ft / self.h * (1.0 - 1e-12)
+                        || pl_rankine(mask) == 0)
+                {
+                    continue;
+                }
+                let ok = x.iter().all(|&v| v * g2 >= -tol)
+                    && new[0] >= new[1] - tol
+                    && new[1] >= new[2] - tol
+                    && (0..6).all(|k| {
+                        let (f, _, _) = self.plane(k, &new, sy);
+                        // MC planes here are half the law's; compare in the law's scale
+                        (if k < 3 { 2.0 * f } else { f }) <= tol
+                    });
+                if ok {
+                    out.push((mask, floor, new));
+                }
+            }
+        }
+        out
+    }
+}
+
+fn pl_rankine(mask: u8) -> u8 {
+    mask & 0b111000
+}
+
+fn sorted(v: [f64; 3]) -> [f64; 3] {
+    let mut s = v;
+    s.sort_by(|a, b| b.total_cmp(a));
+    s
+}
+
+#[test]
+fn returns_agree_with_brute_force_in_every_region() {
+    let law = palabora();
+    let mut rng = Rng(0x9e3779b97f4a7c15);
+    let mut seen = std::collections::BTreeMap::new();
+    let mut ambiguous = 0;
+    let samples = 40_000;
+    for _ in 0..samples {
+        // trial principal stresses spread over tension and compression
+        let scale = if rng.next() < 0.5 { 3e6 } else { 80e6 };
+        let s = sorted([
+            rng.range(-scale, 0.3 * scale),
+            rng.range(-scale, 0.3 * scale),
+            rng.range(-scale, 0.3 * scale),
+        ]);
+        let band = rng.range(0.2, 3.0);
+        let kappa_max = law.tensile_strength / law.softening_modulus(band);
+        let kappa = if rng.next() < 0.3 {
+            0.0
+        } else {
+            rng.range(0.0, 1.2 * kappa_max)
+        };
+        let brute = Brute {
+            e: 60e9,
+            nu: 0.25,
+            c: 8e6,
+            phi: 55.0 * DEG,
+            psi: 9.0 * DEG,
+            h: law.softening_modulus(band),
+        };
+        let tol = law.tolerance(s);
+        let all = brute.consistent(Vector3::from(s), kappa, 1e6, tol);
+        let f = law.yield_functions(s, (1e6 - brute.h * kappa).max(0.0));
+        if f.iter().all(|&v| v <= tol) {
+            continue; // elastic
+        }
+        let got = RETURN_ORDER.iter().find_map(|&(set, ex)| {
+            law.principal_return(s, set, kappa, band, ex)
+                .filter(|r| law.is_consistent(r, tol))
+                .map(|r| (set, r))
+        });
+        let (set, r) =
+            got.unwrap_or_else(|| panic!("no consistent return for {s:?}, kappa {kappa}"));
+        // the selection rule (module notes), applied to the brute force:
+        // fewest planes, Mohr–Coulomb-only first, linear softening first
+        let key = |mask: u8, floor: bool| (mask.count_ones(), mask & 0b111000 != 0, floor);
+        let best = all
+            .iter()
+            .map(|(m, fl, _)| key(*m, *fl))
+            .min()
+            .unwrap_or_else(|| panic!("brute force found nothing for {s:?}"));
+        let chosen: Vec<&Vector3<f64>> = all
+            .iter()
+            .filter(|(m, fl, _)| key(*m, *fl) == best)
+            .map(|(_, _, v)| v)
+            .collect();
+        let same = |b: &Vector3<f64>| (0..3).all(|k| (b[k] - r.stress[k]).abs() <= 1e-7 * scale);
+        assert!(
+            chosen.iter().any(|b| same(b)),
+            "{s:?} kappa {kappa}: law {set:#b} {:?}, brute {all:?}",
+            r.stress
+        );
+        if chosen.iter().any(|b| !same(b)) {
+            ambiguous += 1;
+        }
+        // the active planes are exactly on their surfaces, the others inside
+        let fr = law.yield_functions(r.stress, r.strength);
+        for (k, &bit) in surface::ALL.iter().enumerate() {
+            if set & bit != 0 {
+                assert!(fr[k].abs() <= tol, "plane {bit} of {set:#b}: f = {}", fr[k]);
+                assert!(r.multipliers[k] >= -tol / (2.0 * law.elastic.mu));
+            } else {
+                assert!(fr[k] <= tol);
+                assert_eq!(r.multipliers[k], 0.0);
+            }
+        }
+        assert!(r.stress[0] >= r.stress[1] - tol && r.stress[1] >= r.stress[2] - tol);
+        *seen.entry(set).or_insert(0usize) += 1;
+    }
+    // every region except the Mohr–Coulomb apex (unreachable while the
+    // tension cut-off lies inside it, f_t < c cot φ) is visited
+    for set in CANDIDATES {
+        if set == surface::MC {
+            continue;
+        }
+        assert!(
+            seen.get(&set).copied().unwrap_or(0) > 0,
+            "region {set:#b} never reached: {seen:?}"
+        );
+    }
+    // under the rule the return is unique
+    assert_eq!(ambiguous, 0);
+}
+
+#[test]
+fn apex_is_reached_when_the_cutoff_touches_it() {
+    // f_t = c cot φ puts the tension apex on the Mohr–Coulomb apex; a trial
+    // far out in triaxial tension goes to σ1 = σ2 = σ3 = c cot φ.
+    let e = Elastic::new(60e9, 0.25).unwrap();
+    let (c, phi) = (1e6, 30.0 * DEG);
+    let law = MohrCoulombRankine::new(e, c, phi, 10.0 * DEG, c / phi.tan(), 1e9, CrackBand::Oliver)
+        .unwrap();
+    let s = [9e6, 8e6, 7e6];
+    let r = law
+        .principal_return(s, surface::MC, 0.0, 1e-6, false)
+        .unwrap();
+    let apex = c / phi.tan();
+    for k in 0..3 {
+        assert!((r.stress[k] - apex).abs() < 1e-6 * apex, "{:?}", r.stress);
+    }
+}
+
+#[test]
+fn update_flows_along_the_potential_gradients() {
+    // Δεᵖ = C⁻¹ (σ^tr − σ): its principal components must be a non-negative
+    // combination of the active potential gradients (2.8), and the elastic
+    // part must reproduce the returned stress.
+    let law = palabora();
+    let geometry = Geometry {
+        e1: [1.0, 0.0],
+        e2: [0.3, 0.9],
+    };
+    let mut rng = Rng(42);
+    for _ in 0..5000 {
+        let t = [
+            rng.range(-80e6, 3e6),
+            rng.range(-80e6, 3e6),
+            rng.range(-80e6, 3e6),
+            rng.range(-20e6, 20e6),
+        ];
+        let mut state = PlasticState::default();
+        let u = law.update(t, t, &mut state, &geometry);
+        if u.active == 0 {
+            continue;
+        }
+        let dsig: Vec<f64> = (0..4).map(|k| t[k] - u.stress[k]).collect();
+        let de = law.elastic.strain([dsig[0], dsig[1], dsig[2], dsig[3]]);
+        for k in 0..4 {
+            assert!(
+                (de[k] - state.plastic_strain[k]).abs()
+                    <= 1e-9 * de.iter().fold(1e-12, |m: f64, v| m.max(v.abs()))
+            );
+        }
+        let sp = Spectral::of(t);
+        let (_, order) = Order::sort(sp.a, sp.b, t[2]);
+        // principal plastic strains on the trial's axes
+        let h = 0.5 * (de[0] - de[1]);
+        let m = 0.5 * (de[0] + de[1]);
+        let r = h * sp.cos2 + de[3] * sp.sin2;
+        let principal = [m + r, m - r, de[2]];
+        let sorted_e: Vec<f64> = order.slot.iter().map(|&k| principal[k as usize]).collect();
+        // least-squares combination of the active potentials
+        let active: Vec<u8> = surface::ALL
+            .iter()
+            .copied()
+            .filter(|b| u.active & b != 0)
+            .collect();
+        let a = DMatrix::from_fn(3, active.len(), |i, j| law.gradients(active[j]).1[i]);
+        let x = a
+            .clone()
+            .svd(true, true)
+            .solve(&DVector::from_row_slice(&sorted_e), 1e-14)
+            .unwrap();
+        let resid = (&a * &x - DVector::from_row_slice(&sorted_e)).norm();
+        let size = sorted_e.iter().map(|v| v.abs()).fold(1e-30, f64::max);
+        assert!(
+            resid <= 1e-8 * size,
+            "flow not along potentials: {resid} vs {size}, set {:#b}",
+            u.active
+        );
+        assert!(
+            x.iter().all(|&v| v >= -1e-8 * size),
+            "negative multiplier {x:?}"
+        );
+    }
+}
+
+#[test]
+fn softening_dissipates_the_fracture_energy() {
+    // Uniaxial strain in x driven well past full softening: the fracture
+    // dissipation per unit volume integrates to G_f / h_c (B.4).
+    let e = Elastic::new(30e9, 0.0).unwrap();
+    let law =
+        MohrCoulombRankine::new(e, 8e6, 40.0 * DEG, 0.0, 1e6, 100.0, CrackBand::Oliver).unwrap();
+    let geometry = Geometry {
+        e1: [0.5, 0.0],
+        e2: [0.0, 0.5],
+    };
+    let mut state = PlasticState::default();
+    let mut s = [0.0; 4];
+    let mut dissipated = 0.0;
+    let d_eps = 2e-7;
+    for _ in 0..20_000 {
+        let trial = law.elastic.trial(s, [d_eps, 0.0, 0.0], 1.0);
+        let u = law.update(s, trial, &mut state, &geometry);
+        dissipated += u.fracture_dissipation + u.plastic_dissipation;
+        s = u.stress;
+    }
+    assert!(
+        (state.crack_band - 0.5).abs() < 1e-12,
+        "band {}",
+        state.crack_band
+    );
+    let expected = law.fracture_energy / state.crack_band;
+    assert!(
+        (dissipated - expected).abs() < 1e-3 * expected,
+        "{dissipated} vs {expected}"
+    );
+    assert!(law.failure_factor(&state) > 1.0 && s[0].abs() < 1e-6);
+}
+
+#[test]
+fn parameters_are_checked_by_name() {
+    let e = Elastic::new(60e9, 0.25).unwrap();
+    let make = |c: f64, phi: f64, psi: f64, ft: f64, gf: f64| {
+        MohrCoulombRankine::new(e, c, phi * DEG, psi * DEG, ft, gf, CrackBand::Oliver)
+            .map(|_| ())
+            .map_err(|e| e.parameter)
+    };
+    assert_eq!(make(-1.0, 30.0, 0.0, 1e5, 10.0), Err("c"));
+    assert_eq!(make(1e6, 90.0, 0.0, 1e5, 10.0), Err("phi"));
+    assert_eq!(make(1e6, -1.0, 0.0, 1e5, 10.0), Err("phi"));
+    assert_eq!(make(1e6, 30.0, 40.0, 1e5, 10.0), Err("psi"));
+    assert_eq!(make(1e6, 30.0, -5.0, 1e5, 10.0), Err("psi"));
+    assert_eq!(make(1e6, 30.0, 0.0, 0.0, 10.0), Err("ft"));
+    assert_eq!(make(1e6, 30.0, 0.0, 2e6, 10.0), Err("ft"));
+    assert_eq!(make(1e6, 30.0, 0.0, 1e5, 0.0), Err("Gf"));
+    assert_eq!(make(1e6, 30.0, 10.0, 1e5, 10.0), Ok(()));
+}
