@@ -21,9 +21,8 @@ import argparse  # noqa: E402
 import platform  # noqa: E402
 import time  # noqa: E402
 
-import numpy as np  # noqa: E402
-
 import fdem  # noqa: E402
+import numpy as np  # noqa: E402
 
 
 def build(n_elements: float) -> fdem.Model:
@@ -71,7 +70,10 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5, help="timings per case; the best is reported")
     args = ap.parse_args()
     print(f"fdem {fdem.__version__}, {platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}")
-    print(f"{'elements':>10} {'threads':>7} {'updates/s (wall)':>17} {'per thread':>11} {'updates/CPU-s':>14} {'speed-up':>9}")
+    print(
+        f"{'elements':>10} {'threads':>7} {'updates/s (wall)':>17} {'per thread':>11} "
+        f"{'updates/CPU-s':>14} {'speed-up':>9}"
+    )
     for size in args.sizes:
         model = build(size)
         base = None

@@ -13,9 +13,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 import fdem
+import numpy as np
 from fdem.plot import plot_field
 
 
@@ -36,7 +35,9 @@ def main(out: str | None = "lithostatic_output", height: float = 100.0, progress
     k0 = float(np.median(s[:, 0] / s[:, 1]))
     if out is not None:
         plot_field(sim, "stress_yy", Path(out) / "lithostatic.png", title="Vertical stress under gravity")
-    print(f"σ_yy vs −ρ g z: largest error {error:.2%} of ρ g H; K0 = {k0:.4f} (ν/(1−ν) = {rock.nu / (1 - rock.nu):.4f})")
+    print(
+        f"σ_yy vs −ρ g z: largest error {error:.2%} of ρ g H; K0 = {k0:.4f} (ν/(1−ν) = {rock.nu / (1 - rock.nu):.4f})"
+    )
     return {"max_error": error, "k0": k0, "k0_closed_form": rock.nu / (1 - rock.nu)}
 
 

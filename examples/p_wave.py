@@ -11,9 +11,8 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
-
 import fdem
+import numpy as np
 
 
 def main(out: str | None = None, length: float = 20.0, cells: int = 400, progress: bool = False) -> dict[str, float]:

@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
+import fdem
 import numpy as np
 import pytest
-
-import fdem
 
 ROCK = fdem.Elastic(E=60e9, nu=0.25, rho=3100.0)
 
 
-def perturbed_rectangle(width: float, height: float, nx: int, ny: int, amount: float = 0.25, seed: int = 1) -> fdem.Mesh:
+def perturbed_rectangle(
+    width: float, height: float, nx: int, ny: int, amount: float = 0.25, seed: int = 1
+) -> fdem.Mesh:
     """A structured rectangle whose interior nodes are moved randomly by up to
     ``amount`` of a cell: an unstructured interior with straight sides."""
     base = fdem.Mesh.rectangle(width, height, nx, ny, pattern="alternating")
@@ -36,8 +37,8 @@ def assembled_critical_step(mesh: fdem.Mesh, mat: fdem.Elastic) -> float:
         area = 0.5 * ((x[1, 0] - x[0, 0]) * (x[2, 1] - x[0, 1]) - (x[2, 0] - x[0, 0]) * (x[1, 1] - x[0, 1]))
         b = np.zeros((3, 6))
         for a in range(3):
-            j, l = (a + 1) % 3, (a + 2) % 3
-            gx, gy = (x[j, 1] - x[l, 1]) / (2 * area), (x[l, 0] - x[j, 0]) / (2 * area)
+            j, k2 = (a + 1) % 3, (a + 2) % 3
+            gx, gy = (x[j, 1] - x[k2, 1]) / (2 * area), (x[k2, 0] - x[j, 0]) / (2 * area)
             b[0, 2 * a], b[1, 2 * a + 1], b[2, 2 * a], b[2, 2 * a + 1] = gx, gy, gy, gx
         dofs = np.ravel([[2 * v, 2 * v + 1] for v in tri])
         k[np.ix_(dofs, dofs)] += area * b.T @ c @ b

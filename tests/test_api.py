@@ -7,12 +7,11 @@ import subprocess
 import sys
 import xml.etree.ElementTree as ET
 
+import fdem
 import meshio
 import numpy as np
 import pytest
 from conftest import ROCK
-
-import fdem
 from fdem.cli import main as cli_main
 
 
@@ -51,7 +50,10 @@ def test_read_gmsh_file_with_named_groups(tmp_path):
 
 def test_read_vtu_written_by_meshio(tmp_path):
     base = fdem.Mesh.rectangle(1.0, 1.0, 3, 3)
-    meshio.write(tmp_path / "m.vtu", meshio.Mesh(np.column_stack([base.points, np.zeros(base.n_nodes)]), [("triangle", base.triangles)]))
+    meshio.write(
+        tmp_path / "m.vtu",
+        meshio.Mesh(np.column_stack([base.points, np.zeros(base.n_nodes)]), [("triangle", base.triangles)]),
+    )
     mesh = fdem.Mesh.read(tmp_path / "m.vtu")
     assert mesh.n_elements == base.n_elements and np.allclose(mesh.points, base.points)
 
@@ -100,7 +102,12 @@ def test_run_continues_a_series_and_stops_at_until():
 
 def test_model_round_trips_through_pickle_and_file(tmp_path):
     mesh = fdem.Mesh.rectangle(1.0, 1.0, 3, 3)
-    model = fdem.Model(mesh, material=ROCK).set_gravity(0, -9.81).fix("bottom").pressure("top", 1e5, amplitude=fdem.Amplitude.ramp(1e-3))
+    model = (
+        fdem.Model(mesh, material=ROCK)
+        .set_gravity(0, -9.81)
+        .fix("bottom")
+        .pressure("top", 1e5, amplitude=fdem.Amplitude.ramp(1e-3))
+    )
     clone = pickle.loads(pickle.dumps(model))
     path = tmp_path / "m.fdem"
     model.save(path)
@@ -135,7 +142,9 @@ def test_cli_info_and_run(tmp_path, capsys):
     mesh = fdem.Mesh.rectangle(1.0, 1.0, 2, 2)
     path = tmp_path / "col.fdem"
     fdem.Model(mesh, material=ROCK).set_gravity(0, -9.81).fix("bottom").save(path)
-    code = cli_main(["run", str(path), "--until", "1e-4", "--output-every", "5e-5", "--out", str(tmp_path / "out"), "--quiet"])
+    code = cli_main(
+        ["run", str(path), "--until", "1e-4", "--output-every", "5e-5", "--out", str(tmp_path / "out"), "--quiet"]
+    )
     assert code == 0 and (tmp_path / "out" / "col.pvd").exists()
     assert cli_main(["run", str(tmp_path / "missing.fdem"), "--until", "1"]) == 2
 

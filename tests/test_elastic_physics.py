@@ -5,11 +5,10 @@ Each test states its tolerance beside the assertion and where it comes from.
 
 from __future__ import annotations
 
+import fdem
 import numpy as np
 import pytest
 from conftest import ROCK, assembled_critical_step, perturbed_rectangle
-
-import fdem
 
 
 def test_p_wave_arrival_speed():
@@ -59,7 +58,9 @@ def test_patch_test_linear_field_is_exact(maker):
     a = np.array([[2.0, 0.7], [0.7, -1.2]])  # strain rate (1/s)
     boundary = np.unique(mesh.boundary_facets())
     model = fdem.Model(mesh, material=ROCK)
-    model.prescribe_velocity(boundary, vx=lambda x, y: a[0, 0] * x + a[0, 1] * y, vy=lambda x, y: a[1, 0] * x + a[1, 1] * y)
+    model.prescribe_velocity(
+        boundary, vx=lambda x, y: a[0, 0] * x + a[0, 1] * y, vy=lambda x, y: a[1, 0] * x + a[1, 1] * y
+    )
     model.set_initial_velocity(lambda x, y: np.column_stack([a[0, 0] * x + a[0, 1] * y, a[1, 0] * x + a[1, 1] * y]))
     sim = fdem.Simulation(model)
     sim.step(400)
@@ -233,6 +234,6 @@ def test_same_bits_on_one_and_two_threads():
         return sim.positions(), sim.velocities(), sim.stress(), sim.energies()
 
     a, b = run(1), run(2)
-    for x, y in zip(a[:3], b[:3]):
+    for x, y in zip(a[:3], b[:3], strict=True):
         assert np.array_equal(x, y)
     assert a[3] == b[3]

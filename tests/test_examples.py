@@ -35,3 +35,12 @@ def test_demo_writes_results_and_picture(tmp_path):
     sim = run_demo(tmp_path, quick=True, progress=False)
     assert (tmp_path / "demo.pvd").exists() and (tmp_path / "demo.png").stat().st_size > 10_000
     assert abs(sim.velocities()).max() < 1e-3
+
+
+@pytest.mark.parametrize("confinement", [0.0, 2e6, 5e6, 10e6])
+def test_virtual_laboratory_compression(confinement):
+    """Plateau σ_axial = N_φ σ_conf + UCS within 1%, dilation ratio N_ψ
+    within 2% (issue 3)."""
+    r = load("virtual_laboratory").compression(confinement)
+    assert r["axial"] == pytest.approx(r["expected"], rel=0.01)
+    assert r["dilation"] == pytest.approx(r["n_psi"], rel=0.02)

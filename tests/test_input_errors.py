@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 
+import fdem
 import meshio
 import numpy as np
 import pytest
 from conftest import ROCK
-
-import fdem
 from fdem import _core
 
 SQUARE_PTS = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
@@ -72,7 +71,7 @@ def test_bad_material_names_the_parameter(kwargs, match):
 
 def test_kernel_rejects_bad_material_rows_by_name():
     arrays = fdem.Model(fdem.Mesh(SQUARE_PTS, SQUARE_TRI), material=ROCK).kernel_arrays()
-    arrays["materials"] = np.array([[2700.0, 1e9, 0.7]])
+    arrays["materials"] = [{"kind": "elastic", "rho": 2700.0, "E": 1e9, "nu": 0.7}]
     with pytest.raises(ValueError, match=r"material 0: material parameter nu = 0.7"):
         _core.Simulation(**arrays)
 

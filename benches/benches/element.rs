@@ -21,14 +21,9 @@ fn kernel(c: &mut Criterion) {
         .collect();
     let reference: Vec<_> = xs
         .iter()
-        .map(|x| {
-            reference_inverse(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-                .unwrap_or_else(|| panic!("{x:?}"))
-        })
+        .map(|x| reference_inverse(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap_or_else(|| panic!("{x:?}")))
         .collect();
-    let vs: Vec<Tri<Vec2>> = (0..n)
-        .map(|k| [[0.0, 0.0], [1e-3 * k as f64, 0.0], [0.0, -1e-3]])
-        .collect();
+    let vs: Vec<Tri<Vec2>> = (0..n).map(|k| [[0.0, 0.0], [1e-3 * k as f64, 0.0], [0.0, -1e-3]]).collect();
     let mut stress = vec![[1e6, -2e6, 0.0, 3e5]; n];
     let mut forces = vec![[[0.0; 2]; 3]; n];
     let mut g = c.benchmark_group("element");
@@ -48,8 +43,7 @@ fn kernel(c: &mut Criterion) {
         use fdem_element::batch::{corotational_frames, LANES};
         b.iter(|| {
             for e0 in (0..n).step_by(LANES) {
-                let dm_inv =
-                    std::array::from_fn(|k| std::array::from_fn(|l| reference[e0 + l].dm_inv[k]));
+                let dm_inv = std::array::from_fn(|k| std::array::from_fn(|l| reference[e0 + l].dm_inv[k]));
                 let x = std::array::from_fn(|k| std::array::from_fn(|l| xs[e0 + l][k / 2][k % 2]));
                 let v = std::array::from_fn(|k| std::array::from_fn(|l| vs[e0 + l][k / 2][k % 2]));
                 let f = corotational_frames(&dm_inv, &x, &v, 1e-5);

@@ -13,9 +13,7 @@ fn steps(c: &mut Criterion) {
     g.sample_size(20);
     for threads in [1, 2] {
         let mut sim = Simulation::new(spec.clone(), threads).unwrap();
-        g.bench_function(format!("threads_{threads}"), |b| {
-            b.iter(|| sim.step(1).unwrap())
-        });
+        g.bench_function(format!("threads_{threads}"), |b| b.iter(|| sim.step(1).unwrap()));
     }
     g.finish();
 }

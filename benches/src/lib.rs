@@ -1,7 +1,7 @@
 //! Shared set-up for the criterion benchmarks: structured test models built
 //! directly in Rust, so a bench measures the kernel and nothing else.
 
-use fdem_solver::{Constraint, MaterialSpec, ModelSpec, PressureLoad};
+use fdem_solver::{Constraint, LawSpec, MaterialSpec, ModelSpec, PressureLoad};
 
 /// A block of `nx × ny` cells (2 triangles each, 1 m cells) of rock under
 /// gravity with rollers on the sides and base and a pressure on top.
@@ -26,12 +26,7 @@ pub fn block(nx: usize, ny: usize) -> ModelSpec {
             }
         }
     }
-    let roller = |node, fixed| Constraint {
-        node,
-        fixed,
-        value: [0.0; 2],
-        amplitude: None,
-    };
+    let roller = |node, fixed| Constraint { node, fixed, value: [0.0; 2], amplitude: None };
     let mut constraints = Vec::new();
     for i in 0..=nx {
         constraints.push(roller(id(i, 0), [false, true]));
@@ -40,22 +35,13 @@ pub fn block(nx: usize, ny: usize) -> ModelSpec {
         constraints.push(roller(id(0, j), [true, false]));
         constraints.push(roller(id(nx, j), [true, false]));
     }
-    let pressures = (0..nx)
-        .map(|i| PressureLoad {
-            nodes: [id(i, ny), id(i + 1, ny)],
-            pressure: 1e6,
-            amplitude: None,
-        })
-        .collect();
+    let pressures =
+        (0..nx).map(|i| PressureLoad { nodes: [id(i, ny), id(i + 1, ny)], pressure: 1e6, amplitude: None }).collect();
     let m = triangles.len();
     ModelSpec {
         points,
         triangles,
-        materials: vec![MaterialSpec {
-            density: 3100.0,
-            young: 60e9,
-            poisson: 0.25,
-        }],
+        materials: vec![MaterialSpec { density: 3100.0, young: 60e9, poisson: 0.25, law: LawSpec::Elastic }],
         element_material: vec![0; m],
         gravity: [0.0, -9.81],
         constraints,

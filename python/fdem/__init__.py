@@ -18,7 +18,8 @@ Typical use::
 from . import errors
 from ._core import __version__
 from .errors import InvertedElementError, NonFiniteError, SimulationError
-from .materials import Elastic
+from .laboratory import MaterialPointResult, material_point
+from .materials import Elastic, MohrCoulombRankine
 from .mesh import Mesh, gmsh_rectangle
 from .model import Amplitude, Model
 from .output import VtuSeries, principal_stresses, write_vtu
@@ -27,6 +28,8 @@ from .simulation import Simulation
 __all__ = [
     "Amplitude",
     "Elastic",
+    "MaterialPointResult",
+    "MohrCoulombRankine",
     "InvertedElementError",
     "Mesh",
     "Model",
@@ -37,6 +40,7 @@ __all__ = [
     "__version__",
     "errors",
     "gmsh_rectangle",
+    "material_point",
     "principal_stresses",
     "write_vtu",
 ]

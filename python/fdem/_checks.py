@@ -54,7 +54,7 @@ def index_array(name: str, value: Any, shape: tuple[int | None, ...], upper: int
 
 
 def _check_shape(name: str, a: np.ndarray, shape: tuple[int | None, ...]) -> None:
-    ok = a.ndim == len(shape) and all(s is None or s == d for s, d in zip(shape, a.shape))
+    ok = a.ndim == len(shape) and all(s is None or s == d for s, d in zip(shape, a.shape, strict=False))
     if not ok:
         dims = ["n" if s is None else str(s) for s in shape]
         want = f"({dims[0]},)" if len(dims) == 1 else "(" + ", ".join(dims) + ")"

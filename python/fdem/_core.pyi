@@ -7,10 +7,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 __version__: str
-__all__ = ["Simulation", "validate_mesh", "_panic_selftest", "__version__"]
+__all__ = ["Simulation", "validate_mesh", "material_point", "_panic_selftest", "__version__"]
 
-def validate_mesh(points: NDArray[np.float64], triangles: NDArray[np.int64], may_coincide: NDArray[np.bool_]) -> None: ...
+def validate_mesh(
+    points: NDArray[np.float64], triangles: NDArray[np.int64], may_coincide: NDArray[np.bool_]
+) -> None: ...
 def _panic_selftest() -> None: ...
+def material_point(
+    material: dict[str, Any],
+    initial_stress: tuple[float, float, float, float],
+    crack_band: float,
+    strain_increments: NDArray[np.float64] | None = None,
+    deformation_gradients: NDArray[np.float64] | None = None,
+) -> dict[str, Any]: ...
 
 @final
 class Simulation:
@@ -18,7 +27,7 @@ class Simulation:
         cls,
         points: NDArray[np.float64],
         triangles: NDArray[np.int64],
-        materials: NDArray[np.float64],
+        materials: list[dict[str, Any]],
         element_material: NDArray[np.int64],
         *,
         may_coincide: NDArray[np.bool_] | None = None,
@@ -68,4 +77,5 @@ class Simulation:
     def masses(self) -> NDArray[np.float64]: ...
     def areas(self) -> NDArray[np.float64]: ...
     def active(self) -> NDArray[np.bool_]: ...
+    def element_state(self) -> dict[str, Any]: ...
     def energies(self) -> dict[str, Any]: ...

@@ -1,8 +1,8 @@
 """The ``fdem`` command.
 
-    fdem demo [--out DIR] [--full]   run the demonstration case, write results and a picture
-    fdem run MODEL --until T [...]   run a model saved with Model.save
-    fdem info                        version, threads, optional extras
+fdem demo [--out DIR] [--full]   run the demonstration case, write results and a picture
+fdem run MODEL --until T [...]   run a model saved with Model.save
+fdem info                        version, threads, optional extras
 """
 
 from __future__ import annotations

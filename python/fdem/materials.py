@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any
 
 from ._checks import number
 
-__all__ = ["Elastic"]
+__all__ = ["Elastic", "MohrCoulombRankine"]
 
 
 @dataclass(frozen=True)
@@ -63,5 +65,108 @@ class Elastic:
         """Shear-wave speed ``√(G/ρ)`` (m/s)."""
         return float((self.shear_modulus / self.rho) ** 0.5)
 
-    def _kernel_row(self) -> list[float]:
-        return [self.rho, self.E, self.nu]
+    @property
+    def plane_strain_modulus(self) -> float:
+        """``E' = E / (1 − ν²)`` (Pa)."""
+        return self.E / (1.0 - self.nu**2)
+
+    def _kernel_dict(self) -> dict[str, Any]:
+        return {"kind": "elastic", "rho": self.rho, "E": self.E, "nu": self.nu}
+
+
+@dataclass(frozen=True)
+class MohrCoulombRankine(Elastic):
+    """Mohr–Coulomb shear failure (perfectly plastic, non-associated) with a
+    Rankine tension cut-off softening linearly to zero over the fracture
+    energy (Ecsi & Élesztős 2003, appendices A–C).
+
+    Parameters
+    ----------
+    E, nu, rho : float
+        Elastic constants and density, as for :class:`Elastic`.
+    c : float
+        Cohesion (Pa), ``c >= 0``.
+    phi : float
+        Friction angle (degrees), ``0 <= phi < 90``.
+    psi : float
+        Dilation angle (degrees), ``0 <= psi <= phi``.
+    ft : float
+        Tensile strength (Pa), ``0 < ft <= c cot(phi)``.
+    Gf : float
+        Fracture energy (N/m), ``Gf > 0``.
+    crack_band : {"oliver", "equivalent"}
+        How the crack-band width ``h_c`` is measured: the element's width along
+        σ1 when it first reaches ``ft`` (default; Oliver 1989), or the paper's
+        ``√(4A/π)`` (about 20% too much dissipation for a band one element wide).
+
+    Notes
+    -----
+    The softening modulus is ``H = h_c ft² / (2 Gf)``; an element wider than
+    the snap-back limit ``2 E' Gf / ft²`` is rejected when the model is run.
+    Table 1 of the paper: ``MohrCoulombRankine(E=60e9, nu=0.25, rho=3100,
+    c=8e6, phi=55, psi=9, ft=1e6, Gf=70)``.
+    """
+
+    c: float = 0.0
+    phi: float = 0.0
+    psi: float = 0.0
+    ft: float = 0.0
+    Gf: float = 0.0
+    crack_band: str = "oliver"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        for name in ("c", "phi", "psi", "ft", "Gf"):
+            object.__setattr__(self, name, number(name, getattr(self, name)))
+        if self.c < 0:
+            raise ValueError(f"c = {self.c} must be >= 0 (cohesion, Pa)")
+        if not 0 <= self.phi < 90:
+            raise ValueError(f"phi = {self.phi} must lie in [0, 90) degrees (friction angle)")
+        if not 0 <= self.psi < 90:
+            raise ValueError(f"psi = {self.psi} must lie in [0, 90) degrees (dilation angle)")
+        if self.psi > self.phi:
+            raise ValueError(f"psi = {self.psi} must not exceed phi = {self.phi} (dilation above friction)")
+        if self.ft <= 0:
+            raise ValueError(f"ft = {self.ft} must be positive (tensile strength, Pa)")
+        if self.phi > 0 and self.ft > self.c / math.tan(math.radians(self.phi)) * (1 + 1e-12):
+            apex = self.c / math.tan(math.radians(self.phi))
+            raise ValueError(f"ft = {self.ft} must not exceed c*cot(phi) = {apex:.6g} Pa (the Mohr-Coulomb apex)")
+        if self.Gf <= 0:
+            raise ValueError(f"Gf = {self.Gf} must be positive (fracture energy, N/m)")
+        if self.crack_band not in ("oliver", "equivalent"):
+            raise ValueError(f"crack_band = {self.crack_band!r} must be 'oliver' or 'equivalent'")
+
+    @property
+    def ucs(self) -> float:
+        """Uniaxial compressive strength ``2 c cos φ / (1 − sin φ)`` (Pa)."""
+        p = math.radians(self.phi)
+        return 2 * self.c * math.cos(p) / (1 - math.sin(p))
+
+    @property
+    def n_phi(self) -> float:
+        """``N_φ = (1 + sin φ) / (1 − sin φ)``: slope of the triaxial line."""
+        s = math.sin(math.radians(self.phi))
+        return (1 + s) / (1 - s)
+
+    @property
+    def n_psi(self) -> float:
+        """``N_ψ = (1 + sin ψ) / (1 − sin ψ)``: plastic dilation ratio."""
+        s = math.sin(math.radians(self.psi))
+        return (1 + s) / (1 - s)
+
+    @property
+    def snap_back_size(self) -> float:
+        """Largest element size without snap-back, ``2 E' Gf / ft²`` (m)."""
+        return 2 * self.plane_strain_modulus * self.Gf / self.ft**2
+
+    def _kernel_dict(self) -> dict[str, Any]:
+        return {
+            **super()._kernel_dict(),
+            "kind": "mohr_coulomb_rankine",
+            "c": self.c,
+            "phi": self.phi,
+            "psi": self.psi,
+            "ft": self.ft,
+            "Gf": self.Gf,
+            "crack_band": self.crack_band,
+        }

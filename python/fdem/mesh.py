@@ -78,7 +78,9 @@ class Mesh:
         else:
             iface = np.asarray(interface_nodes)
             if iface.dtype != bool or iface.shape != (n,):
-                raise ValueError(f"interface_nodes: expected a bool array of shape ({n},), got {iface.dtype} {iface.shape}")
+                raise ValueError(
+                    f"interface_nodes: expected a bool array of shape ({n},), got {iface.dtype} {iface.shape}"
+                )
         _core.validate_mesh(pts, tri, np.ascontiguousarray(iface))
         self._points = _frozen(pts)
         self._triangles = _frozen(tri)
@@ -158,6 +160,23 @@ class Mesh:
                 dict(self._element_sets),
                 self._interface,
             ),
+        )
+
+    def with_sets(
+        self,
+        *,
+        node_sets: Mapping[str, Any] | None = None,
+        facet_sets: Mapping[str, Any] | None = None,
+        element_sets: Mapping[str, Any] | None = None,
+    ) -> Mesh:
+        """A copy with more (or replaced) named groups."""
+        return Mesh(
+            self._points,
+            self._triangles,
+            node_sets={**self._node_sets, **(node_sets or {})},
+            facet_sets={**self._facet_sets, **(facet_sets or {})},
+            element_sets={**self._element_sets, **(element_sets or {})},
+            interface_nodes=self._interface,
         )
 
     # --- derived ----------------------------------------------------------
@@ -335,7 +354,9 @@ class Mesh:
         pts = pts[used]
         tri = renum[tri]
         p = pts[tri]
-        cw = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]) < 0
+        cw = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 2, 0] - p[:, 0, 0]) * (
+            p[:, 1, 1] - p[:, 0, 1]
+        ) < 0
         tri[cw] = tri[cw][:, [0, 2, 1]]
         node_sets: dict[str, Any] = {}
         facet_sets: dict[str, Any] = {}
@@ -403,12 +424,16 @@ def gmsh_rectangle(
         gmsh.option.setNumber("Mesh.RandomSeed", int(seed))
         gmsh.model.add("rectangle")
         geo = gmsh.model.geo
-        c = [geo.addPoint(x0, y0, 0, s), geo.addPoint(x0 + w, y0, 0, s),
-             geo.addPoint(x0 + w, y0 + h, 0, s), geo.addPoint(x0, y0 + h, 0, s)]
+        c = [
+            geo.addPoint(x0, y0, 0, s),
+            geo.addPoint(x0 + w, y0, 0, s),
+            geo.addPoint(x0 + w, y0 + h, 0, s),
+            geo.addPoint(x0, y0 + h, 0, s),
+        ]
         lines = [geo.addLine(c[k], c[(k + 1) % 4]) for k in range(4)]
         surf = geo.addPlaneSurface([geo.addCurveLoop(lines)])
         geo.synchronize()
-        for name, line in zip(("bottom", "right", "top", "left"), lines):
+        for name, line in zip(("bottom", "right", "top", "left"), lines, strict=True):
             gmsh.model.addPhysicalGroup(1, [line], name=name)
         gmsh.model.addPhysicalGroup(2, [surf], name="body")
         gmsh.option.setNumber("Mesh.Algorithm", 6)
@@ -419,7 +444,7 @@ def gmsh_rectangle(
         _, tri_nodes = gmsh.model.mesh.getElementsByType(2)
         tri = np.vectorize(index.__getitem__)(np.asarray(tri_nodes, dtype=np.int64)).reshape(-1, 3)
         facet_sets = {}
-        for name, line in zip(("bottom", "right", "top", "left"), lines):
+        for name, line in zip(("bottom", "right", "top", "left"), lines, strict=True):
             _, _, nodes = gmsh.model.mesh.getElements(1, line)
             facet_sets[name] = np.vectorize(index.__getitem__)(np.asarray(nodes[0], dtype=np.int64)).reshape(-1, 2)
     finally:
@@ -429,6 +454,8 @@ def gmsh_rectangle(
     renum[used] = np.arange(len(used))
     tri = renum[tri]
     p = pts[used][tri]
-    cw = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]) < 0
+    cw = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 2, 0] - p[:, 0, 0]) * (
+        p[:, 1, 1] - p[:, 0, 1]
+    ) < 0
     tri[cw] = tri[cw][:, [0, 2, 1]]
     return Mesh(pts[used], tri, facet_sets={k: renum[v] for k, v in facet_sets.items()})

@@ -10,18 +10,18 @@ import os
 import pickle
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, Union
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ._checks import float_array, number
-from .materials import Elastic
+from .materials import Elastic, MohrCoulombRankine
 from .mesh import Mesh
 
 __all__ = ["Amplitude", "Model"]
 
-Material = Union[Elastic]
+Material = Elastic | MohrCoulombRankine
 
 _FORMAT = "fdem-model"
 _VERSION = 1
@@ -200,7 +200,11 @@ class Model:
             if comp is None:
                 continue
             if callable(comp):
-                values[:, d] = float_array(f"{name} (returned by the function)", np.broadcast_to(comp(xy[:, 0], xy[:, 1]), (len(nodes),)), (len(nodes),))
+                values[:, d] = float_array(
+                    f"{name} (returned by the function)",
+                    np.broadcast_to(comp(xy[:, 0], xy[:, 1]), (len(nodes),)),
+                    (len(nodes),),
+                )
             else:
                 values[:, d] = number(name, comp)
         self._constraints.append(_Constraint(nodes, (vx is not None, vy is not None), values, amplitude))
@@ -311,7 +315,7 @@ class Model:
         out: dict[str, Any] = {
             "points": np.ascontiguousarray(self.mesh.points),
             "triangles": np.ascontiguousarray(self.mesh.triangles),
-            "materials": np.array([m._kernel_row() for m in self._materials], dtype=np.float64),
+            "materials": [m._kernel_dict() for m in self._materials],
             "element_material": self._element_material.copy(),
             "may_coincide": np.ascontiguousarray(self.mesh.interface_nodes),
             "gravity": self.gravity,

@@ -39,10 +39,17 @@ def _pad3(a: NDArray[np.float64]) -> NDArray[np.float64]:
 def cell_fields(sim: Simulation) -> dict[str, NDArray[Any]]:
     """The element fields written to each frame."""
     stress = sim.stress()
+    state = sim.element_state()
     return {
         "stress": stress,
         "principal_stress_1": principal_stresses(stress)[:, 0],
         "active": sim.active().astype(np.uint8),
+        "failure_factor": state["failure_factor"],
+        "plastic_strain": state["equivalent_plastic_strain"],
+        "plastic_strain_tensor": state["plastic_strain"],
+        "fracturing_strain": state["kappa"],
+        "crack_band": state["crack_band"],
+        "crack_direction": state["crack_direction"],
     }
 
 
@@ -88,9 +95,7 @@ class VtuSeries:
         self.index = self.directory / f"{name}.pvd"
         self.energy_csv = self.directory / f"{name}_energy.csv"
         if self.index.exists() and not overwrite:
-            raise FileExistsError(
-                f"{self.index} already exists; pass overwrite=True or choose another output name"
-            )
+            raise FileExistsError(f"{self.index} already exists; pass overwrite=True or choose another output name")
         for old in self.directory.glob(f"{name}_[0-9][0-9][0-9][0-9][0-9].vtu"):
             old.unlink()
         self.frames: list[tuple[float, str]] = []
@@ -109,7 +114,11 @@ class VtuSeries:
         return self.directory / fname
 
     def _write_index(self) -> None:
-        lines = ['<?xml version="1.0"?>', '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">', "  <Collection>"]
+        lines = [
+            '<?xml version="1.0"?>',
+            '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
+            "  <Collection>",
+        ]
         for t, f in self.frames:
             lines.append(f'    <DataSet timestep="{t:.9g}" group="" part="0" file={quoteattr(f)}/>')
         lines += ["  </Collection>", "</VTKFile>", ""]

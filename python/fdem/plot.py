@@ -34,7 +34,7 @@ def field_values(sim: Simulation, field: str) -> tuple[np.ndarray, bool]:
         return np.linalg.norm(sim.velocities(), axis=1), True
     cells = cell_fields(sim)
     if field.startswith("stress_"):
-        k = ["xx", "yy", "zz", "xy"].index(field[len("stress_"):])
+        k = ["xx", "yy", "zz", "xy"].index(field[len("stress_") :])
         return cells["stress"][:, k], False
     if field not in cells:
         known = sorted([*cells, *_LABELS])

@@ -41,7 +41,9 @@ class RunProgress:
                 transient=False,
             )
             self._progress.__enter__()
-            self._task = self._progress.add_task("run", total=max(self.until - self.start, 1e-300), t=self.start, until=self.until, rate=0.0)
+            self._task = self._progress.add_task(
+                "run", total=max(self.until - self.start, 1e-300), t=self.start, until=self.until, rate=0.0
+            )
         return self
 
     def update(self, t: float, steps: int) -> None:
@@ -54,8 +56,6 @@ class RunProgress:
                 self._task, completed=min(t, self.until) - self.start, t=t, rate=(steps - self._steps0) / wall
             )
 
-    def __exit__(
-        self, et: type[BaseException] | None, ev: BaseException | None, tb: TracebackType | None
-    ) -> None:
+    def __exit__(self, et: type[BaseException] | None, ev: BaseException | None, tb: TracebackType | None) -> None:
         if self._progress is not None:
             self._progress.__exit__(et, ev, tb)

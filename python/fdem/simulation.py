@@ -161,6 +161,14 @@ class Simulation:
         """Whether each element is active (not excavated)."""
         return self._core.active()
 
+    def element_state(self) -> dict[str, NDArray[np.float64]]:
+        """Per-element material state: ``kappa`` (fracturing strain κ),
+        ``crack_band`` (h_c, m; 0 before the first crack), ``failure_factor``
+        (κ H / f_t, eq. 2.21), ``crack_direction`` (direction of σ1 at the last
+        tensile plastic step, rad, current frame), ``plastic_strain`` (n, 4,
+        current frame) and ``equivalent_plastic_strain``."""
+        return dict(self._core.element_state())
+
     def energies(self) -> dict[str, float]:
         """The energy account (J per unit thickness): ``kinetic``, ``elastic``,
         ``external_work``, ``support_work``, damping and dissipation terms,
@@ -177,7 +185,9 @@ class Simulation:
 
     def set_prescribed_velocity(self, nodes: Any, values: Any) -> None:
         """Changes the prescribed velocity (m/s) of nodes that already have one."""
-        self._core.set_prescribed_velocity(np.asarray(nodes, dtype=np.int64).ravel(), np.asarray(values, dtype=np.float64).reshape(-1, 2))
+        self._core.set_prescribed_velocity(
+            np.asarray(nodes, dtype=np.int64).ravel(), np.asarray(values, dtype=np.float64).reshape(-1, 2)
+        )
 
     def write_vtu(self, path: str | os.PathLike[str]) -> None:
         """Writes the current state to one VTU file."""

@@ -101,11 +101,7 @@ pub fn corotational_frames(dm_inv: &[Lanes; 4], x: &TriLanes, v: &TriLanes, dt: 
         lanes(|l| ds_mid[0][l] * inv_det[l]),
     ];
     let lg = mul(&edge(v), &dsi);
-    let d = [
-        lanes(|l| lg[0][l]),
-        lanes(|l| lg[3][l]),
-        lanes(|l| 0.5 * (lg[1][l] + lg[2][l])),
-    ];
+    let d = [lanes(|l| lg[0][l]), lanes(|l| lg[3][l]), lanes(|l| 0.5 * (lg[1][l] + lg[2][l]))];
     let cc = lanes(|l| c_mid[l] * c_mid[l]);
     let ss = lanes(|l| s_mid[l] * s_mid[l]);
     let cs = lanes(|l| c_mid[l] * s_mid[l]);
@@ -166,10 +162,7 @@ mod tests {
             assert_eq!(batch.d_hat(l), s.d_hat);
             assert_eq!(batch.d(l), s.d);
             assert_eq!((batch.cos_new[l], batch.sin_new[l]), (s.cos_new, s.sin_new));
-            assert_eq!(
-                (batch.twice_area_new[l], batch.twice_area_mid[l]),
-                (s.twice_area_new, s.twice_area_mid)
-            );
+            assert_eq!((batch.twice_area_new[l], batch.twice_area_mid[l]), (s.twice_area_new, s.twice_area_mid));
         }
     }
 }

@@ -10,9 +10,7 @@
 //! decomposition of `F`, so a rigid rotation leaves `σ̂` untouched and turns
 //! `σ` with the body exactly.
 
-use crate::kinematics::{
-    deformation_gradient, edge_matrix, inverse_2x2, mul_2x2, polar_rotation, ReferenceShape,
-};
+use crate::kinematics::{deformation_gradient, edge_matrix, inverse_2x2, mul_2x2, polar_rotation, ReferenceShape};
 use crate::{Tri, Vec2};
 
 /// A rate of deformation in Voigt order `[xx, yy, xy]` (1/s), with the
@@ -58,18 +56,9 @@ pub fn corotational_frame(
 ) -> CorotationalFrame {
     let h = 0.5 * dt;
     let x_mid = [
-        [
-            x_new[0][0] - h * v_half[0][0],
-            x_new[0][1] - h * v_half[0][1],
-        ],
-        [
-            x_new[1][0] - h * v_half[1][0],
-            x_new[1][1] - h * v_half[1][1],
-        ],
-        [
-            x_new[2][0] - h * v_half[2][0],
-            x_new[2][1] - h * v_half[2][1],
-        ],
+        [x_new[0][0] - h * v_half[0][0], x_new[0][1] - h * v_half[0][1]],
+        [x_new[1][0] - h * v_half[1][0], x_new[1][1] - h * v_half[1][1]],
+        [x_new[2][0] - h * v_half[2][0], x_new[2][1] - h * v_half[2][1]],
     ];
     let ds_mid = edge_matrix(&x_mid);
     let det_mid = ds_mid[0] * ds_mid[3] - ds_mid[1] * ds_mid[2];
@@ -104,10 +93,7 @@ mod tests {
     const X: Tri<Vec2> = [[0.0, 0.0], [1.0, 0.2], [0.3, 0.9]];
 
     fn rot(th: f64, p: Vec2) -> Vec2 {
-        [
-            th.cos() * p[0] - th.sin() * p[1],
-            th.sin() * p[0] + th.cos() * p[1],
-        ]
+        [th.cos() * p[0] - th.sin() * p[1], th.sin() * p[0] + th.cos() * p[1]]
     }
 
     #[test]
@@ -118,12 +104,7 @@ mod tests {
         let (t0, t1, dt) = (0.4, 0.45, 1e-3);
         let x_old = X.map(|p| rot(t0, p));
         let x_new = X.map(|p| rot(t1, p));
-        let v = [0, 1, 2].map(|a| {
-            [
-                (x_new[a][0] - x_old[a][0]) / dt,
-                (x_new[a][1] - x_old[a][1]) / dt,
-            ]
-        });
+        let v = [0, 1, 2].map(|a| [(x_new[a][0] - x_old[a][0]) / dt, (x_new[a][1] - x_old[a][1]) / dt]);
         let f = corotational_frame(&reference, &x_new, &v, dt);
         for k in 0..3 {
             assert!(f.d_hat[k].abs() < 1e-9, "{:?}", f.d_hat);
@@ -145,11 +126,7 @@ mod tests {
         let x_new = [0, 1, 2].map(|a| [x_mid[a][0] + 0.5 * dt * v[a][0], x_mid[a][1]]);
         let f = corotational_frame(&reference, &x_new, &v, dt);
         assert!((f.d[0] - rate).abs() < 1e-12);
-        assert!(
-            (f.d_hat[1] - rate).abs() < 1e-8 && f.d_hat[0].abs() < 1e-8,
-            "{:?}",
-            f.d_hat
-        );
+        assert!((f.d_hat[1] - rate).abs() < 1e-8 && f.d_hat[0].abs() < 1e-8, "{:?}", f.d_hat);
         // and a co-rotational stress along ŷ maps to the current x axis
         let sigma = rotate([0.0, 1.0, 0.0, 0.0], f.cos_new, f.sin_new);
         assert!((sigma[0] - 1.0).abs() < 1e-6);

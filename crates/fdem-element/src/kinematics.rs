@@ -23,12 +23,7 @@ pub fn signed_area(x: &Tri<Vec2>) -> f64 {
 /// for `[[a, b], [c, d]]`.
 #[inline(always)]
 pub fn edge_matrix(x: &Tri<Vec2>) -> [f64; 4] {
-    [
-        x[1][0] - x[0][0],
-        x[2][0] - x[0][0],
-        x[1][1] - x[0][1],
-        x[2][1] - x[0][1],
-    ]
+    [x[1][0] - x[0][0], x[2][0] - x[0][0], x[1][1] - x[0][1], x[2][1] - x[0][1]]
 }
 
 /// Inverse of a 2×2 row-major matrix given its determinant.
@@ -41,12 +36,7 @@ pub fn inverse_2x2(m: [f64; 4], det: f64) -> [f64; 4] {
 /// Product of two 2×2 row-major matrices.
 #[inline(always)]
 pub fn mul_2x2(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
-    [
-        a[0] * b[0] + a[1] * b[2],
-        a[0] * b[1] + a[1] * b[3],
-        a[2] * b[0] + a[3] * b[2],
-        a[2] * b[1] + a[3] * b[3],
-    ]
+    [a[0] * b[0] + a[1] * b[2], a[0] * b[1] + a[1] * b[3], a[2] * b[0] + a[3] * b[2], a[2] * b[1] + a[3] * b[3]]
 }
 
 /// What an element keeps of its reference configuration: `Dm⁻¹`, the inverse
@@ -62,9 +52,7 @@ pub struct ReferenceShape {
 pub fn reference_inverse(x_ref: &Tri<Vec2>) -> Option<ReferenceShape> {
     let dm = edge_matrix(x_ref);
     let det = dm[0] * dm[3] - dm[1] * dm[2];
-    (det > 0.0 && det.is_finite()).then(|| ReferenceShape {
-        dm_inv: inverse_2x2(dm, det),
-    })
+    (det > 0.0 && det.is_finite()).then(|| ReferenceShape { dm_inv: inverse_2x2(dm, det) })
 }
 
 /// Deformation gradient `F = Ds Dm⁻¹` (row-major).
@@ -141,12 +129,7 @@ mod tests {
     fn affine_map_gives_its_gradient() {
         // x = A X + b with A known: F must equal A exactly.
         let a = [1.1, 0.3, -0.2, 0.9];
-        let map = |p: Vec2| {
-            [
-                a[0] * p[0] + a[1] * p[1] + 3.0,
-                a[2] * p[0] + a[3] * p[1] - 1.0,
-            ]
-        };
+        let map = |p: Vec2| [a[0] * p[0] + a[1] * p[1] + 3.0, a[2] * p[0] + a[3] * p[1] - 1.0];
         let x = [map(T[0]), map(T[1]), map(T[2])];
         let f = deformation_gradient(&reference_inverse(&T).unwrap(), &x);
         for k in 0..4 {

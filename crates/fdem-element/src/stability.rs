@@ -92,17 +92,7 @@ mod tests {
         let c = DMatrix::from_row_slice(
             3,
             3,
-            &[
-                f * (1.0 - nu),
-                f * nu,
-                0.0,
-                f * nu,
-                f * (1.0 - nu),
-                0.0,
-                0.0,
-                0.0,
-                f * (1.0 - 2.0 * nu) / 2.0,
-            ],
+            &[f * (1.0 - nu), f * nu, 0.0, f * nu, f * (1.0 - nu), 0.0, 0.0, 0.0, f * (1.0 - 2.0 * nu) / 2.0],
         );
         let k = b.transpose() * c * b * a;
         let m = rho * a / 3.0;

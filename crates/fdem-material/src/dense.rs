@@ -6,10 +6,7 @@ pub const MAX: usize = 4;
 
 /// Solves `g x = f` for the leading `n × n` block; `None` when singular.
 pub fn solve(mut g: [[f64; MAX]; MAX], mut f: [f64; MAX], n: usize) -> Option<[f64; MAX]> {
-    let scale = (0..n)
-        .flat_map(|i| (0..n).map(move |j| (i, j)))
-        .map(|(i, j)| g[i][j].abs())
-        .fold(0.0, f64::max);
+    let scale = (0..n).flat_map(|i| (0..n).map(move |j| (i, j))).map(|(i, j)| g[i][j].abs()).fold(0.0, f64::max);
     if scale == 0.0 {
         return None;
     }
@@ -42,21 +39,11 @@ mod tests {
 
     #[test]
     fn solves_and_detects_singular() {
-        let g = [
-            [0.0, 2.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0, 0.0],
-            [0.0, 0.0, 3.0, 1.0],
-            [0.0, 0.0, 1.0, 2.0],
-        ];
+        let g = [[0.0, 2.0, 0.0, 0.0], [1.0, 1.0, 0.0, 0.0], [0.0, 0.0, 3.0, 1.0], [0.0, 0.0, 1.0, 2.0]];
         let x = solve(g, [4.0, 3.0, 5.0, 5.0], 4).unwrap();
         assert!((x[0] - 1.0).abs() < 1e-14 && (x[1] - 2.0).abs() < 1e-14);
         assert!((x[2] - 1.0).abs() < 1e-14 && (x[3] - 2.0).abs() < 1e-14);
-        let s = [
-            [1.0, 2.0, 0.0, 0.0],
-            [2.0, 4.0, 0.0, 0.0],
-            [0.0; 4],
-            [0.0; 4],
-        ];
+        let s = [[1.0, 2.0, 0.0, 0.0], [2.0, 4.0, 0.0, 0.0], [0.0; 4], [0.0; 4]];
         assert!(solve(s, [1.0, 2.0, 0.0, 0.0], 2).is_none());
     }
 }

@@ -20,12 +20,7 @@ impl Elastic {
     /// `−1 < ν < 0.5`.
     pub fn new(young: f64, poisson: f64) -> Result<Self, ParameterError> {
         check("E", young, young > 0.0, "Young's modulus must be positive")?;
-        check(
-            "nu",
-            poisson,
-            poisson > -1.0 && poisson < 0.5,
-            "Poisson's ratio must lie in (-1, 0.5)",
-        )?;
+        check("nu", poisson, poisson > -1.0 && poisson < 0.5, "Poisson's ratio must lie in (-1, 0.5)")?;
         Ok(Self {
             young,
             poisson,
@@ -52,12 +47,7 @@ impl Elastic {
     pub fn trial(&self, sigma: [f64; 4], d_hat: [f64; 3], dt: f64) -> [f64; 4] {
         let l = self.lambda * (d_hat[0] + d_hat[1]) * dt;
         let g = 2.0 * self.mu * dt;
-        [
-            sigma[0] + l + g * d_hat[0],
-            sigma[1] + l + g * d_hat[1],
-            sigma[2] + l,
-            sigma[3] + g * d_hat[2],
-        ]
+        [sigma[0] + l + g * d_hat[0], sigma[1] + l + g * d_hat[1], sigma[2] + l, sigma[3] + g * d_hat[2]]
     }
 
     /// Viscous stress `β C : D` (Pa) of stiffness-proportional damping with
@@ -85,8 +75,7 @@ impl Elastic {
     #[inline]
     pub fn energy_density(&self, s: [f64; 4]) -> f64 {
         let (e, nu) = (self.young, self.poisson);
-        let normal = s[0] * s[0] + s[1] * s[1] + s[2] * s[2]
-            - 2.0 * nu * (s[0] * s[1] + s[1] * s[2] + s[2] * s[0]);
+        let normal = s[0] * s[0] + s[1] * s[1] + s[2] * s[2] - 2.0 * nu * (s[0] * s[1] + s[1] * s[2] + s[2] * s[0]);
         0.5 * normal / e + s[3] * s[3] / (2.0 * self.mu)
     }
 }

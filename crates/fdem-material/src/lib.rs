@@ -32,29 +32,16 @@ pub struct ParameterError {
 
 impl std::fmt::Display for ParameterError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "material parameter {} = {} is invalid: {}",
-            self.parameter, self.value, self.requirement
-        )
+        write!(f, "material parameter {} = {} is invalid: {}", self.parameter, self.value, self.requirement)
     }
 }
 
 impl std::error::Error for ParameterError {}
 
-pub(crate) fn check(
-    parameter: &'static str,
-    value: f64,
-    ok: bool,
-    requirement: &str,
-) -> Result<(), ParameterError> {
+pub(crate) fn check(parameter: &'static str, value: f64, ok: bool, requirement: &str) -> Result<(), ParameterError> {
     if ok && value.is_finite() {
         Ok(())
     } else {
-        Err(ParameterError {
-            parameter,
-            value,
-            requirement: requirement.to_string(),
-        })
+        Err(ParameterError { parameter, value, requirement: requirement.to_string() })
     }
 }

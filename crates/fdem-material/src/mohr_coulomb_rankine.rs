@@ -131,6 +131,10 @@ pub struct MohrCoulombRankine {
     sin_phi: f64,
     cos_phi: f64,
     sin_psi: f64,
+    /// `C n_β` of each plane (constant for these linear surfaces).
+    cn: [[f64; 3]; 6],
+    /// `a_α · C n_β` of each pair of planes.
+    acn: [[f64; 6]; 6],
 }
 
 /// What the law remembers per material point.
@@ -176,10 +180,7 @@ impl Geometry {
     /// Longest edge (m): the largest width over all directions.
     pub fn diameter(&self) -> f64 {
         let d = [self.e2[0] - self.e1[0], self.e2[1] - self.e1[1]];
-        self.e1[0]
-            .hypot(self.e1[1])
-            .max(self.e2[0].hypot(self.e2[1]))
-            .max(d[0].hypot(d[1]))
+        self.e1[0].hypot(self.e1[1]).max(self.e2[0].hypot(self.e2[1])).max(d[0].hypot(d[1]))
     }
 }
 
@@ -236,36 +237,17 @@ impl MohrCoulombRankine {
             (0.0..quarter).contains(&dilation),
             "dilation angle must lie in [0, 90) degrees",
         )?;
-        check(
-            "psi",
-            dilation.to_degrees(),
-            dilation <= friction,
-            "dilation angle must not exceed the friction angle",
-        )?;
-        check(
-            "ft",
-            tensile_strength,
-            tensile_strength > 0.0,
-            "tensile strength must be positive",
-        )?;
-        let apex = if friction > 0.0 {
-            cohesion / friction.tan()
-        } else {
-            f64::INFINITY
-        };
+        check("psi", dilation.to_degrees(), dilation <= friction, "dilation angle must not exceed the friction angle")?;
+        check("ft", tensile_strength, tensile_strength > 0.0, "tensile strength must be positive")?;
+        let apex = if friction > 0.0 { cohesion / friction.tan() } else { f64::INFINITY };
         check(
             "ft",
             tensile_strength,
             tensile_strength <= apex * (1.0 + 1e-12),
             &format!("tensile strength must not exceed c*cot(phi) = {apex:.6e} Pa (the Mohr-Coulomb apex)"),
         )?;
-        check(
-            "Gf",
-            fracture_energy,
-            fracture_energy > 0.0,
-            "fracture energy must be positive",
-        )?;
-        Ok(Self {
+        check("Gf", fracture_energy, fracture_energy > 0.0, "fracture energy must be positive")?;
+        let mut law = Self {
             elastic,
             cohesion,
             friction,
@@ -276,7 +258,19 @@ impl MohrCoulombRankine {
             sin_phi: friction.sin(),
             cos_phi: friction.cos(),
             sin_psi: dilation.sin(),
-        })
+            cn: [[0.0; 3]; 6],
+            acn: [[0.0; 6]; 6],
+        };
+        for (j, &b) in ALL.iter().enumerate() {
+            law.cn[j] = law.c_times(law.gradients(b).1);
+        }
+        for (i, &b) in ALL.iter().enumerate() {
+            let a = law.gradients(b).0;
+            for j in 0..6 {
+                law.acn[i][j] = a[0] * law.cn[j][0] + a[1] * law.cn[j][1] + a[2] * law.cn[j][2];
+            }
+        }
+        Ok(law)
     }
 
     /// Uniaxial compressive strength `2 c cos φ / (1 − sin φ)` (Pa).
@@ -334,14 +328,7 @@ impl MohrCoulombRankine {
     pub fn yield_functions(&self, s: [f64; 3], sy: f64) -> [f64; 6] {
         let (sp, k) = (self.sin_phi, 2.0 * self.cohesion * self.cos_phi);
         let mc = |i: usize, j: usize| s[i] * (1.0 + sp) - s[j] * (1.0 - sp) - k;
-        [
-            mc(0, 2),
-            mc(0, 1),
-            mc(1, 2),
-            s[0] - sy,
-            s[1] - sy,
-            s[2] - sy,
-        ]
+        [mc(0, 2), mc(0, 1), mc(1, 2), s[0] - sy, s[1] - sy, s[2] - sy]
     }
 
     /// Gradient `a` of the yield function and `n` of the potential of plane
@@ -388,80 +375,69 @@ impl MohrCoulombRankine {
     ) -> Option<PrincipalReturn> {
         let (sy, h) = self.strength(kappa, crack_band);
         if !exhausted {
-            return self
-                .solve_set(s, active, kappa, sy, h)
-                .filter(|r| r.strength >= 0.0);
+            return self.solve_set(s, active, kappa, sy, h).filter(|r| r.strength >= 0.0);
         }
         if h == 0.0 || active & RANKINE == 0 {
             return None; // already exhausted: the linear branch covers it
         }
         let kappa_max = self.tensile_strength / h;
-        self.solve_set(s, active, kappa, 0.0, 0.0)
-            .filter(|r| r.kappa >= kappa_max * (1.0 - 1e-12))
-            .map(|mut r| {
-                r.strength = 0.0;
-                r
-            })
+        self.solve_set(s, active, kappa, 0.0, 0.0).filter(|r| r.kappa >= kappa_max * (1.0 - 1e-12)).map(|mut r| {
+            r.strength = 0.0;
+            r
+        })
     }
 
-    fn solve_set(
-        &self,
-        s: [f64; 3],
-        active: u8,
-        kappa: f64,
-        sy: f64,
-        h: f64,
-    ) -> Option<PrincipalReturn> {
+    fn solve_set(&self, s: [f64; 3], active: u8, kappa: f64, sy: f64, h: f64) -> Option<PrincipalReturn> {
         if active == P13 | P23 | R1 | R2 {
             return self.left_edge_tensile_corner(s, kappa, sy, h);
         }
-        let mut bits = [0u8; MAX];
+        // plane indices (positions in ALL) of the active set
+        let mut idx = [0usize; MAX];
         let mut n = 0;
-        for b in ALL {
+        for (k, b) in ALL.iter().enumerate() {
             if active & b != 0 {
                 if n == MAX {
                     return None;
                 }
-                bits[n] = b;
+                idx[n] = k;
                 n += 1;
             }
         }
         let f = self.yield_functions(s, sy);
         let mut g = [[0.0; MAX]; MAX];
         let mut rhs = [0.0; MAX];
-        let mut cn = [[0.0; 3]; MAX];
-        for (j, &b) in bits[..n].iter().enumerate() {
-            cn[j] = self.c_times(self.gradients(b).1);
-        }
-        for (i, &bi) in bits[..n].iter().enumerate() {
-            let (a, _) = self.gradients(bi);
-            rhs[i] = f[ALL.iter().position(|&x| x == bi).unwrap_or(0)];
-            for (j, &bj) in bits[..n].iter().enumerate() {
-                g[i][j] = a[0] * cn[j][0] + a[1] * cn[j][1] + a[2] * cn[j][2];
-                if bi & RANKINE != 0 && bj & RANKINE != 0 {
+        for i in 0..n {
+            rhs[i] = f[idx[i]];
+            for j in 0..n {
+                g[i][j] = self.acn[idx[i]][idx[j]];
+                if idx[i] >= 3 && idx[j] >= 3 {
                     g[i][j] -= h;
                 }
             }
         }
-        let x = solve(g, rhs, n)?;
+        let x = if n == 1 {
+            // one plane: a single division
+            if g[0][0] <= 0.0 {
+                return None;
+            }
+            [rhs[0] / g[0][0], 0.0, 0.0, 0.0]
+        } else {
+            solve(g, rhs, n)?
+        };
         let mut out = s;
         let mut multipliers = [0.0; 6];
         let mut dk = 0.0;
-        for (j, &b) in bits[..n].iter().enumerate() {
+        for j in 0..n {
+            let cn = &self.cn[idx[j]];
             for k in 0..3 {
-                out[k] -= x[j] * cn[j][k];
+                out[k] -= x[j] * cn[k];
             }
-            multipliers[ALL.iter().position(|&a| a == b).unwrap_or(0)] = x[j];
-            if b & RANKINE != 0 {
+            multipliers[idx[j]] = x[j];
+            if idx[j] >= 3 {
                 dk += x[j];
             }
         }
-        Some(PrincipalReturn {
-            stress: out,
-            multipliers,
-            kappa: kappa + dk,
-            strength: sy - h * dk,
-        })
+        Some(PrincipalReturn { stress: out, multipliers, kappa: kappa + dk, strength: sy - h * dk })
     }
 
     /// The corner of C.19: left edge (P13 + P23) with the σ1 and σ2 planes.
@@ -472,13 +448,7 @@ impl MohrCoulombRankine {
     /// the σ1 and σ2 multipliers by `±b (1 + sin ψ)` and leaves the plastic
     /// strain and κ unchanged. Solve P13 + R1 + R2, then take the middle of
     /// the range of `b` that keeps all four multipliers non-negative.
-    fn left_edge_tensile_corner(
-        &self,
-        s: [f64; 3],
-        kappa: f64,
-        sy: f64,
-        h: f64,
-    ) -> Option<PrincipalReturn> {
+    fn left_edge_tensile_corner(&self, s: [f64; 3], kappa: f64, sy: f64, h: f64) -> Option<PrincipalReturn> {
         let mut r = self.solve_set(s, P13 | R1 | R2, kappa, sy, h)?;
         let (total, c0, d0) = (r.multipliers[0], r.multipliers[3], r.multipliers[4]);
         let k = 1.0 + self.sin_psi;
@@ -496,19 +466,14 @@ impl MohrCoulombRankine {
     /// function ≤ 0 and the principal order kept, within `tol` (Pa).
     pub fn is_consistent(&self, r: &PrincipalReturn, tol: f64) -> bool {
         let g2 = 2.0 * self.elastic.mu;
-        if r.multipliers
-            .iter()
-            .any(|&x| x * g2 < -tol || !x.is_finite())
-        {
+        if r.multipliers.iter().any(|&x| x * g2 < -tol || !x.is_finite()) {
             return false;
         }
         let s = r.stress;
         if s[0] < s[1] - tol || s[1] < s[2] - tol {
             return false;
         }
-        self.yield_functions(s, r.strength)
-            .iter()
-            .all(|&f| f <= tol)
+        self.yield_functions(s, r.strength).iter().all(|&f| f <= tol)
     }
 
     /// Stress tolerance of the consistency checks for trial `s` (Pa).
@@ -519,8 +484,8 @@ impl MohrCoulombRankine {
     /// The elastic-plastic update of one material point.
     ///
     /// `old` is the co-rotational stress at the start of the step, `trial`
-    /// the elastic trial `old + C : D̂ Δt` (Pa); `geometry` gives the crack
-    /// band when the point first reaches `f_t`. Updates `state` and returns
+    /// the elastic trial `old + C : D̂ Δt` (Pa); `geometry` is called for the
+    /// element's shape only when the point first reaches `f_t`. Updates `state` and returns
     /// the new stress with the dissipation of the step, measured as
     /// `½ (σⁿ + σⁿ⁺¹) : Δεᵖ`, which makes the internal work equal to the
     /// change of elastic energy plus the dissipation exactly.
@@ -529,37 +494,25 @@ impl MohrCoulombRankine {
         old: [f64; 4],
         trial: [f64; 4],
         state: &mut PlasticState,
-        geometry: &Geometry,
+        geometry: impl FnOnce() -> Geometry,
     ) -> Update {
         let sp = Spectral::of(trial);
         let (s, order) = Order::sort(sp.a, sp.b, trial[2]);
         let tol = self.tolerance(s);
         // before the first crack κ = 0 and the strength is f_t whatever the band
-        let band = if state.crack_band > 0.0 {
-            state.crack_band
-        } else {
-            1.0
-        };
+        let band = if state.crack_band > 0.0 { state.crack_band } else { 1.0 };
         let f = self.yield_functions(s, self.strength(state.kappa, band).0);
         if f[0] <= tol && f[3] <= tol {
-            return Update {
-                stress: trial,
-                active: 0,
-                plastic_dissipation: 0.0,
-                fracture_dissipation: 0.0,
-            };
+            return Update { stress: trial, active: 0, plastic_dissipation: 0.0, fracture_dissipation: 0.0 };
         }
         if state.crack_band == 0.0 && f[3] > tol {
+            let geometry = geometry();
             state.crack_band = match self.crack_band {
                 CrackBand::Oliver => geometry.width_along(sp.angle()),
                 CrackBand::Equivalent => (4.0 * geometry.area() / std::f64::consts::PI).sqrt(),
             };
         }
-        let band = if state.crack_band > 0.0 {
-            state.crack_band
-        } else {
-            1.0
-        };
+        let band = if state.crack_band > 0.0 { state.crack_band } else { 1.0 };
         let mut chosen: Option<(u8, PrincipalReturn)> = None;
         for &(set, exhausted) in &RETURN_ORDER {
             if set & RANKINE != 0 && state.crack_band == 0.0 {
@@ -573,12 +526,7 @@ impl MohrCoulombRankine {
             }
         }
         let Some((active, r)) = chosen.or_else(|| self.least_violating(s, state, band)) else {
-            return Update {
-                stress: trial,
-                active: 0,
-                plastic_dissipation: 0.0,
-                fracture_dissipation: 0.0,
-            };
+            return Update { stress: trial, active: 0, plastic_dissipation: 0.0, fracture_dissipation: 0.0 };
         };
         // plastic strain increments in principal space, split MC / tensile
         let mut de_mc = [0.0; 3];
@@ -589,11 +537,7 @@ impl MohrCoulombRankine {
                 continue;
             }
             let (_, n) = self.gradients(b);
-            let target = if b & RANKINE != 0 {
-                &mut de_t
-            } else {
-                &mut de_mc
-            };
+            let target = if b & RANKINE != 0 { &mut de_t } else { &mut de_mc };
             for i in 0..3 {
                 target[i] += x * n[i];
             }
@@ -611,40 +555,25 @@ impl MohrCoulombRankine {
             0.5 * (old[2] + stress[2]),
             0.5 * (old[3] + stress[3]),
         ];
-        let work =
-            |e: [f64; 4]| mid[0] * e[0] + mid[1] * e[1] + mid[2] * e[2] + 2.0 * mid[3] * e[3];
+        let work = |e: [f64; 4]| mid[0] * e[0] + mid[1] * e[1] + mid[2] * e[2] + 2.0 * mid[3] * e[3];
         let mut total = [0.0; 4];
         for k in 0..4 {
             total[k] = e_mc[k] + e_t[k];
             state.plastic_strain[k] += total[k];
         }
-        let sq = de_mc
-            .iter()
-            .zip(&de_t)
-            .map(|(m, t)| (m + t) * (m + t))
-            .sum::<f64>();
+        let sq = de_mc.iter().zip(&de_t).map(|(m, t)| (m + t) * (m + t)).sum::<f64>();
         state.equivalent_plastic_strain += (2.0 / 3.0 * sq).sqrt();
         if active & RANKINE != 0 {
             state.kappa = r.kappa;
             state.direction = sp.angle();
         }
-        Update {
-            stress,
-            active,
-            plastic_dissipation: work(e_mc),
-            fracture_dissipation: work(e_t),
-        }
+        Update { stress, active, plastic_dissipation: work(e_mc), fracture_dissipation: work(e_t) }
     }
 
     /// Fallback when no candidate is consistent within tolerance (a round-off
     /// corner case): the candidate with non-negative multipliers and the
     /// smallest violation.
-    fn least_violating(
-        &self,
-        s: [f64; 3],
-        state: &PlasticState,
-        band: f64,
-    ) -> Option<(u8, PrincipalReturn)> {
+    fn least_violating(&self, s: [f64; 3], state: &PlasticState, band: f64) -> Option<(u8, PrincipalReturn)> {
         let mut best: Option<(f64, u8, PrincipalReturn)> = None;
         for &(set, exhausted) in &RETURN_ORDER {
             if set & RANKINE != 0 && state.crack_band == 0.0 {
@@ -656,10 +585,7 @@ impl MohrCoulombRankine {
             if r.multipliers.iter().any(|&x| x < 0.0) {
                 continue;
             }
-            let v = self
-                .yield_functions(r.stress, r.strength)
-                .iter()
-                .fold(0.0f64, |m, &f| m.max(f));
+            let v = self.yield_functions(r.stress, r.strength).iter().fold(0.0f64, |m, &f| m.max(f));
             if best.is_none_or(|(bv, _, _)| v < bv) {
                 best = Some((v, set, r));
             }

@@ -21,18 +21,9 @@ impl Spectral {
     pub fn of(t: [f64; 4]) -> Self {
         let mean = 0.5 * (t[0] + t[1]);
         let half = 0.5 * (t[0] - t[1]);
-        let r = half.hypot(t[3]);
-        let (cos2, sin2) = if r > 0.0 {
-            (half / r, t[3] / r)
-        } else {
-            (1.0, 0.0)
-        };
-        Self {
-            a: mean + r,
-            b: mean - r,
-            cos2,
-            sin2,
-        }
+        let r = (half * half + t[3] * t[3]).sqrt();
+        let (cos2, sin2) = if r > 0.0 { (half / r, t[3] / r) } else { (1.0, 0.0) };
+        Self { a: mean + r, b: mean - r, cos2, sin2 }
     }
 
     /// The in-plane tensor with principal values `a`, `b` on these

@@ -45,12 +45,7 @@ pub fn edge_adjacency(triangles: &[[u32; 3]]) -> Vec<EdgeAdjacency> {
             j += 1;
         }
         let get = |m: usize| (m < j).then(|| (half[m].1, half[m].2));
-        out.push(EdgeAdjacency {
-            nodes: key,
-            first: (half[i].1, half[i].2),
-            second: get(i + 1),
-            extra: get(i + 2),
-        });
+        out.push(EdgeAdjacency { nodes: key, first: (half[i].1, half[i].2), second: get(i + 1), extra: get(i + 2) });
         i = j;
     }
     out
@@ -64,11 +59,7 @@ pub fn boundary_facets(triangles: &[[u32; 3]]) -> Vec<Facet> {
         .map(|e| {
             let (element, local) = e.first;
             let t = triangles[element as usize];
-            Facet {
-                nodes: [t[local as usize], t[(local as usize + 1) % 3]],
-                element,
-                local,
-            }
+            Facet { nodes: [t[local as usize], t[(local as usize + 1) % 3]], element, local }
         })
         .collect();
     facets.sort_unstable_by_key(|f| (f.element, f.local));

@@ -31,9 +31,6 @@ pub type Point = [f64; 2];
 pub fn node_elements(n_nodes: usize, triangles: &[[u32; 3]]) -> Csr {
     Csr::from_pairs(
         n_nodes,
-        triangles
-            .iter()
-            .enumerate()
-            .flat_map(|(e, t)| (0..3).map(move |k| (t[k] as usize, (e * 3 + k) as u32))),
+        triangles.iter().enumerate().flat_map(|(e, t)| (0..3).map(move |k| (t[k] as usize, (e * 3 + k) as u32))),
     )
 }

@@ -14,8 +14,9 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use fdem_solver::material_point::{material_point as drive_point, Path};
 use fdem_solver::{
-    Amplitude, Constraint, MaterialSpec, ModelSpec, PressureLoad, RunError, Settings,
+    Amplitude, Constraint, CrackBand, LawSpec, MaterialSpec, ModelSpec, PressureLoad, RunError, Settings,
 };
 
 /// Runs `f`, turning a panic into a `RuntimeError`.
@@ -28,9 +29,7 @@ fn guard<T>(f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
                 .map(|s| s.to_string())
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown panic".into());
-            Err(PyRuntimeError::new_err(format!(
-                "internal error in the fdem kernel: {msg} (please report this)"
-            )))
+            Err(PyRuntimeError::new_err(format!("internal error in the fdem kernel: {msg} (please report this)")))
         }
     }
 }
@@ -43,29 +42,17 @@ fn value_error(msg: impl Into<String>) -> PyErr {
 fn rows<const N: usize>(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f64; N]>> {
     let v = a.as_array();
     if v.ncols() != N {
-        return Err(value_error(format!(
-            "{name} must have shape (n, {N}), got {:?}",
-            v.shape()
-        )));
+        return Err(value_error(format!("{name} must have shape (n, {N}), got {:?}", v.shape())));
     }
-    Ok(v.rows()
-        .into_iter()
-        .map(|r| std::array::from_fn(|k| r[k]))
-        .collect())
+    Ok(v.rows().into_iter().map(|r| std::array::from_fn(|k| r[k])).collect())
 }
 
 fn int_rows<const N: usize>(name: &str, a: &PyReadonlyArray2<'_, i64>) -> PyResult<Vec<[i64; N]>> {
     let v = a.as_array();
     if v.ncols() != N {
-        return Err(value_error(format!(
-            "{name} must have shape (n, {N}), got {:?}",
-            v.shape()
-        )));
+        return Err(value_error(format!("{name} must have shape (n, {N}), got {:?}", v.shape())));
     }
-    Ok(v.rows()
-        .into_iter()
-        .map(|r| std::array::from_fn(|k| r[k]))
-        .collect())
+    Ok(v.rows().into_iter().map(|r| std::array::from_fn(|k| r[k])).collect())
 }
 
 fn to_u32(name: &str, i: usize, x: i64) -> PyResult<u32> {
@@ -82,16 +69,56 @@ fn amp_index(name: &str, i: usize, x: i64) -> PyResult<Option<u32>> {
 
 fn vec2_array<'py>(py: Python<'py>, v: &[[f64; 2]]) -> Bound<'py, PyArray2<f64>> {
     let flat: Vec<f64> = v.iter().flatten().copied().collect();
-    Array2::from_shape_vec((v.len(), 2), flat)
-        .expect("shape")
-        .into_pyarray(py)
+    Array2::from_shape_vec((v.len(), 2), flat).expect("shape").into_pyarray(py)
 }
 
 fn vec4_array<'py>(py: Python<'py>, v: &[[f64; 4]]) -> Bound<'py, PyArray2<f64>> {
     let flat: Vec<f64> = v.iter().flatten().copied().collect();
-    Array2::from_shape_vec((v.len(), 4), flat)
-        .expect("shape")
-        .into_pyarray(py)
+    Array2::from_shape_vec((v.len(), 4), flat).expect("shape").into_pyarray(py)
+}
+
+fn get_f64(d: &Bound<'_, PyDict>, index: usize, key: &str) -> PyResult<f64> {
+    d.get_item(key)?
+        .ok_or_else(|| value_error(format!("material {index}: missing parameter {key}")))?
+        .extract::<f64>()
+        .map_err(|_| value_error(format!("material {index}: parameter {key} must be a number")))
+}
+
+/// A material from the dict the Python layer builds (`Material._kernel_dict`):
+/// `kind`, `rho`, `E`, `nu`, and for `mohr_coulomb_rankine` also `c`, `phi`
+/// and `psi` (degrees; converted to radians here), `ft`, `Gf`, `crack_band`.
+fn material_from_dict(index: usize, d: &Bound<'_, PyDict>) -> PyResult<MaterialSpec> {
+    let kind: String =
+        d.get_item("kind")?.ok_or_else(|| value_error(format!("material {index}: missing kind")))?.extract()?;
+    let law = match kind.as_str() {
+        "elastic" => LawSpec::Elastic,
+        "mohr_coulomb_rankine" => {
+            let band: String = d.get_item("crack_band")?.map(|v| v.extract()).transpose()?.unwrap_or("oliver".into());
+            LawSpec::MohrCoulombRankine {
+                cohesion: get_f64(d, index, "c")?,
+                friction: get_f64(d, index, "phi")?.to_radians(),
+                dilation: get_f64(d, index, "psi")?.to_radians(),
+                tensile_strength: get_f64(d, index, "ft")?,
+                fracture_energy: get_f64(d, index, "Gf")?,
+                crack_band: match band.as_str() {
+                    "oliver" => CrackBand::Oliver,
+                    "equivalent" => CrackBand::Equivalent,
+                    other => {
+                        return Err(value_error(format!(
+                            "material {index}: crack_band must be 'oliver' or 'equivalent', got '{other}'"
+                        )))
+                    }
+                },
+            }
+        }
+        other => return Err(value_error(format!("material {index}: unknown kind '{other}'"))),
+    };
+    Ok(MaterialSpec {
+        density: get_f64(d, index, "rho")?,
+        young: get_f64(d, index, "E")?,
+        poisson: get_f64(d, index, "nu")?,
+        law,
+    })
 }
 
 /// Converts a run error into the matching `fdem.errors` exception.
@@ -100,27 +127,12 @@ fn run_error(py: Python<'_>, e: RunError) -> PyErr {
     let made = (|| -> PyResult<PyErr> {
         let errors = py.import("fdem.errors")?;
         let exc = match e {
-            RunError::InvertedElement {
-                element,
-                step,
-                time,
-            } => {
-                errors
-                    .getattr("InvertedElementError")?
-                    .call1((msg.clone(), element, step, time))?
+            RunError::InvertedElement { element, step, time } => {
+                errors.getattr("InvertedElementError")?.call1((msg.clone(), element, step, time))?
             }
-            RunError::NonFinite {
-                node,
-                quantity,
-                step,
-                time,
-            } => errors.getattr("NonFiniteError")?.call1((
-                msg.clone(),
-                node,
-                quantity,
-                step,
-                time,
-            ))?,
+            RunError::NonFinite { node, quantity, step, time } => {
+                errors.getattr("NonFiniteError")?.call1((msg.clone(), node, quantity, step, time))?
+            }
         };
         Ok(PyErr::from_value(exc))
     })();
@@ -139,9 +151,7 @@ struct PySimulation {
 impl PySimulation {
     fn ok(&self) -> PyResult<()> {
         if self.poisoned {
-            Err(PyRuntimeError::new_err(
-                "this simulation was stopped by an internal error and cannot continue",
-            ))
+            Err(PyRuntimeError::new_err("this simulation was stopped by an internal error and cannot continue"))
         } else {
             Ok(())
         }
@@ -165,7 +175,7 @@ impl PySimulation {
     fn new(
         points: PyReadonlyArray2<'_, f64>,
         triangles: PyReadonlyArray2<'_, i64>,
-        materials: PyReadonlyArray2<'_, f64>,
+        materials: Vec<Bound<'_, PyDict>>,
         element_material: PyReadonlyArray1<'_, i64>,
         may_coincide: Option<PyReadonlyArray1<'_, bool>>,
         gravity: (f64, f64),
@@ -193,44 +203,31 @@ impl PySimulation {
                 .enumerate()
                 .map(|(e, t)| {
                     if let Some(v) = t.iter().find(|&&v| v < 0) {
-                        Err(value_error(format!(
-                            "element {e} refers to node {v}; node ids must be >= 0"
-                        )))
+                        Err(value_error(format!("element {e} refers to node {v}; node ids must be >= 0")))
                     } else {
                         Ok(t.map(|v| v as u64))
                     }
                 })
                 .collect::<PyResult<_>>()?;
-            let materials = rows::<3>("materials", &materials)?
-                .into_iter()
-                .map(|[density, young, poisson]| MaterialSpec {
-                    density,
-                    young,
-                    poisson,
-                })
-                .collect();
+            let materials =
+                materials.iter().enumerate().map(|(i, d)| material_from_dict(i, d)).collect::<PyResult<Vec<_>>>()?;
             let element_material = element_material
                 .as_array()
                 .iter()
                 .enumerate()
                 .map(|(i, &k)| to_u32("element_material", i, k))
                 .collect::<PyResult<_>>()?;
-            let may_coincide = may_coincide
-                .map(|a| a.as_array().to_vec())
-                .unwrap_or_default();
+            let may_coincide = may_coincide.map(|a| a.as_array().to_vec()).unwrap_or_default();
 
             let mut constraints = Vec::new();
             if let Some(nodes) = constraint_nodes {
                 let nodes = nodes.as_array();
                 let c = nodes.len();
-                let fixed =
-                    constraint_fixed.ok_or_else(|| value_error("constraint_fixed is required"))?;
+                let fixed = constraint_fixed.ok_or_else(|| value_error("constraint_fixed is required"))?;
                 let fixed = fixed.as_array();
-                let values = constraint_values
-                    .ok_or_else(|| value_error("constraint_values is required"))?;
+                let values = constraint_values.ok_or_else(|| value_error("constraint_values is required"))?;
                 let values = rows::<2>("constraint_values", &values)?;
-                let amp = constraint_amplitude
-                    .ok_or_else(|| value_error("constraint_amplitude is required"))?;
+                let amp = constraint_amplitude.ok_or_else(|| value_error("constraint_amplitude is required"))?;
                 let amp = amp.as_array();
                 if fixed.shape() != [c, 2] || values.len() != c || amp.len() != c {
                     return Err(value_error("constraint arrays must have matching lengths"));
@@ -247,21 +244,16 @@ impl PySimulation {
             let mut pressures = Vec::new();
             if let Some(f) = pressure_facets {
                 let f = int_rows::<2>("pressure_facets", &f)?;
-                let p =
-                    pressure_values.ok_or_else(|| value_error("pressure_values is required"))?;
+                let p = pressure_values.ok_or_else(|| value_error("pressure_values is required"))?;
                 let p = p.as_array();
-                let amp = pressure_amplitude
-                    .ok_or_else(|| value_error("pressure_amplitude is required"))?;
+                let amp = pressure_amplitude.ok_or_else(|| value_error("pressure_amplitude is required"))?;
                 let amp = amp.as_array();
                 if p.len() != f.len() || amp.len() != f.len() {
                     return Err(value_error("pressure arrays must have matching lengths"));
                 }
                 for i in 0..f.len() {
                     pressures.push(PressureLoad {
-                        nodes: [
-                            to_u32("pressure_facets", i, f[i][0])?,
-                            to_u32("pressure_facets", i, f[i][1])?,
-                        ],
+                        nodes: [to_u32("pressure_facets", i, f[i][0])?, to_u32("pressure_facets", i, f[i][1])?],
                         pressure: p[i],
                         amplitude: amp_index("pressure_amplitude", i, amp[i])?,
                     });
@@ -276,30 +268,13 @@ impl PySimulation {
                 gravity: [gravity.0, gravity.1],
                 constraints,
                 pressures,
-                amplitudes: amplitudes
-                    .into_iter()
-                    .map(|(times, values)| Amplitude { times, values })
-                    .collect(),
-                initial_velocity: initial_velocity
-                    .map(|a| rows::<2>("initial_velocity", &a))
-                    .transpose()?,
-                initial_stress: initial_stress
-                    .map(|a| rows::<4>("initial_stress", &a))
-                    .transpose()?,
-                settings: Settings {
-                    mass_damping,
-                    stiffness_damping,
-                    safety,
-                    fixed_dt,
-                    dt_interval,
-                },
+                amplitudes: amplitudes.into_iter().map(|(times, values)| Amplitude { times, values }).collect(),
+                initial_velocity: initial_velocity.map(|a| rows::<2>("initial_velocity", &a)).transpose()?,
+                initial_stress: initial_stress.map(|a| rows::<4>("initial_stress", &a)).transpose()?,
+                settings: Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval },
             };
-            let sim = fdem_solver::Simulation::new(spec, threads)
-                .map_err(|e| value_error(e.to_string()))?;
-            Ok(PySimulation {
-                sim,
-                poisoned: false,
-            })
+            let sim = fdem_solver::Simulation::new(spec, threads).map_err(|e| value_error(e.to_string()))?;
+            Ok(PySimulation { sim, poisoned: false })
         })
     }
 
@@ -359,16 +334,8 @@ impl PySimulation {
     ) -> PyResult<()> {
         guard(|| {
             self.ok()?;
-            let s = Settings {
-                mass_damping,
-                stiffness_damping,
-                safety,
-                fixed_dt,
-                dt_interval,
-            };
-            self.sim
-                .set_settings(s)
-                .map_err(|e| value_error(e.to_string()))
+            let s = Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval };
+            self.sim.set_settings(s).map_err(|e| value_error(e.to_string()))
         })
     }
 
@@ -381,18 +348,12 @@ impl PySimulation {
         guard(|| {
             self.ok()?;
             let values = rows::<2>("values", &values)?;
-            let nodes: Vec<u32> = nodes
-                .as_array()
-                .iter()
-                .enumerate()
-                .map(|(i, &n)| to_u32("nodes", i, n))
-                .collect::<PyResult<_>>()?;
+            let nodes: Vec<u32> =
+                nodes.as_array().iter().enumerate().map(|(i, &n)| to_u32("nodes", i, n)).collect::<PyResult<_>>()?;
             if nodes.len() != values.len() {
                 return Err(value_error("nodes and values must have the same length"));
             }
-            self.sim
-                .set_prescribed_velocity(&nodes, &values)
-                .map_err(|e| value_error(e.to_string()))
+            self.sim.set_prescribed_velocity(&nodes, &values).map_err(|e| value_error(e.to_string()))
         })
     }
 
@@ -462,9 +423,7 @@ impl PySimulation {
     fn triangles<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
         let t = self.sim.triangles();
         let flat: Vec<i64> = t.iter().flatten().map(|&v| v as i64).collect();
-        Array2::from_shape_vec((t.len(), 3), flat)
-            .expect("shape")
-            .into_pyarray(py)
+        Array2::from_shape_vec((t.len(), 3), flat).expect("shape").into_pyarray(py)
     }
 
     /// Lumped nodal masses (kg per unit thickness), a copy.
@@ -480,6 +439,27 @@ impl PySimulation {
     /// Whether each element is active.
     fn active<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
         self.sim.active().to_vec().into_pyarray(py)
+    }
+
+    /// Per-element material state as a dict of arrays: `kappa` (fracturing
+    /// strain), `crack_band` (m), `failure_factor`, `crack_direction` (rad,
+    /// current frame), `plastic_strain` (n, 4, current frame),
+    /// `equivalent_plastic_strain`.
+    fn element_state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        guard(|| {
+            let st = self.sim.plastic_states();
+            let d = PyDict::new(py);
+            d.set_item("kappa", st.iter().map(|s| s.kappa).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("crack_band", st.iter().map(|s| s.crack_band).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("failure_factor", self.sim.failure_factors().into_pyarray(py))?;
+            d.set_item("crack_direction", self.sim.crack_directions().into_pyarray(py))?;
+            d.set_item("plastic_strain", vec4_array(py, &self.sim.plastic_strain()))?;
+            d.set_item(
+                "equivalent_plastic_strain",
+                st.iter().map(|s| s.equivalent_plastic_strain).collect::<Vec<_>>().into_pyarray(py),
+            )?;
+            Ok(d)
+        })
     }
 
     /// The energy account (J per unit thickness) as a dict.
@@ -514,13 +494,49 @@ fn validate_mesh(
 ) -> PyResult<()> {
     guard(|| {
         let points = rows::<2>("points", &points)?;
-        let triangles: Vec<[u64; 3]> = int_rows::<3>("triangles", &triangles)?
-            .into_iter()
-            .map(|t| t.map(|v| v.max(0) as u64))
-            .collect();
+        let triangles: Vec<[u64; 3]> =
+            int_rows::<3>("triangles", &triangles)?.into_iter().map(|t| t.map(|v| v.max(0) as u64)).collect();
         let may = may_coincide.as_array().to_vec();
-        fdem_solver::validate_mesh(&points, &triangles, &may)
-            .map_err(|e| value_error(e.to_string()))
+        fdem_solver::validate_mesh(&points, &triangles, &may).map_err(|e| value_error(e.to_string()))
+    })
+}
+
+/// Drives one material point (see `fdem.material_point`): exactly one of
+/// `strain_increments` (n, 3: xx, yy, xy tensor shear) or
+/// `deformation_gradients` (n, 4: F11, F12, F21, F22). Returns a dict of
+/// history arrays.
+#[pyfunction]
+#[pyo3(signature = (material, initial_stress, crack_band, strain_increments=None, deformation_gradients=None))]
+fn material_point<'py>(
+    py: Python<'py>,
+    material: Bound<'py, PyDict>,
+    initial_stress: (f64, f64, f64, f64),
+    crack_band: f64,
+    strain_increments: Option<PyReadonlyArray2<'py, f64>>,
+    deformation_gradients: Option<PyReadonlyArray2<'py, f64>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        let spec = material_from_dict(0, &material)?;
+        let path = match (strain_increments, deformation_gradients) {
+            (Some(a), None) => Path::StrainIncrements(rows::<3>("strain_increments", &a)?),
+            (None, Some(f)) => Path::DeformationGradients(rows::<4>("deformation_gradients", &f)?),
+            _ => return Err(value_error("give exactly one of strain_increments and deformation_gradients")),
+        };
+        let (a, b, c, e) = initial_stress;
+        let h = drive_point(&spec, [a, b, c, e], &path, crack_band).map_err(|e| value_error(e.to_string()))?;
+        let d = PyDict::new(py);
+        d.set_item("stress", vec4_array(py, &h.stress))?;
+        d.set_item("plastic_strain", vec4_array(py, &h.state.iter().map(|s| s.plastic_strain).collect::<Vec<_>>()))?;
+        d.set_item("kappa", h.state.iter().map(|s| s.kappa).collect::<Vec<_>>().into_pyarray(py))?;
+        d.set_item(
+            "equivalent_plastic_strain",
+            h.state.iter().map(|s| s.equivalent_plastic_strain).collect::<Vec<_>>().into_pyarray(py),
+        )?;
+        d.set_item("failure_factor", h.failure_factor.into_pyarray(py))?;
+        d.set_item("active", h.active.into_pyarray(py))?;
+        d.set_item("plastic_dissipation", h.plastic_dissipation.into_pyarray(py))?;
+        d.set_item("fracture_dissipation", h.fracture_dissipation.into_pyarray(py))?;
+        Ok(d)
     })
 }
 
@@ -536,6 +552,7 @@ fn _panic_selftest() -> PyResult<()> {
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PySimulation>()?;
     m.add_function(wrap_pyfunction!(validate_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(material_point, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_selftest, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -39,8 +39,7 @@ impl Energies {
     /// The energy-balance residual `W_ext + W_support + E_kin,0 + E_el,0 −
     /// (E_kin + E_el + dissipation)`; zero for an exact integration.
     pub fn residual(&self) -> f64 {
-        let supplied =
-            self.external_work + self.support_work + self.kinetic_initial + self.elastic_initial;
+        let supplied = self.external_work + self.support_work + self.kinetic_initial + self.elastic_initial;
         supplied - self.kinetic - self.elastic - self.dissipated()
     }
 

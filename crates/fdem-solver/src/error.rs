@@ -66,21 +66,12 @@ pub enum RunError {
 impl std::fmt::Display for RunError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            RunError::InvertedElement {
-                element,
-                step,
-                time,
-            } => write!(
+            RunError::InvertedElement { element, step, time } => write!(
                 f,
                 "element {element} inverted (area <= 0) at step {step}, time {time:.6e} s; \
                  reduce the time-step safety factor or the load rate, or check the supports"
             ),
-            RunError::NonFinite {
-                node,
-                quantity,
-                step,
-                time,
-            } => {
+            RunError::NonFinite { node, quantity, step, time } => {
                 write!(f, "{quantity} of node {node} became NaN or infinite at step {step}, time {time:.6e} s")
             }
         }

@@ -20,15 +20,17 @@
 mod energy;
 mod error;
 mod loads;
+pub mod material_point;
 mod model;
 mod passes;
 mod simulation;
 
 pub use energy::Energies;
 pub use error::{RunError, SetupError};
+pub use fdem_material::{CrackBand, PlasticState};
 pub use fdem_mesh::validate as validate_mesh;
 pub use loads::{Amplitude, Constraint, PressureLoad};
-pub use model::{MaterialSpec, ModelSpec, Settings};
+pub use model::{LawSpec, MaterialSpec, ModelSpec, Settings};
 pub use simulation::Simulation;
 
 /// Nodes or elements per parallel work item. Fixed, so that partial sums

@@ -34,9 +34,7 @@ impl Amplitude {
         if ok_len && finite && increasing {
             Ok(())
         } else {
-            Err(format!(
-                "amplitude {index}: needs equally many finite times and values, times strictly increasing"
-            ))
+            Err(format!("amplitude {index}: needs equally many finite times and values, times strictly increasing"))
         }
     }
 }
@@ -75,19 +73,11 @@ mod tests {
 
     #[test]
     fn amplitude_interpolates_and_clamps() {
-        let a = Amplitude {
-            times: vec![0.0, 1.0, 3.0],
-            values: vec![0.0, 2.0, 2.0],
-        };
+        let a = Amplitude { times: vec![0.0, 1.0, 3.0], values: vec![0.0, 2.0, 2.0] };
         assert_eq!(a.at(-1.0), 0.0);
         assert_eq!(a.at(0.25), 0.5);
         assert_eq!(a.at(2.0), 2.0);
         assert_eq!(a.at(9.0), 2.0);
-        assert!(Amplitude {
-            times: vec![1.0, 1.0],
-            values: vec![0.0, 1.0]
-        }
-        .check(0)
-        .is_err());
+        assert!(Amplitude { times: vec![1.0, 1.0], values: vec![0.0, 1.0] }.check(0).is_err());
     }
 }

@@ -1,8 +1,10 @@
 //! The description of a model as the solver receives it.
 
+use fdem_material::CrackBand;
+
 use crate::loads::{Amplitude, Constraint, PressureLoad};
 
-/// A material as given by the user: density and elastic constants.
+/// A material as given by the user: density, elastic constants and law.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MaterialSpec {
     /// Density `ρ` (kg/m³).
@@ -11,6 +13,31 @@ pub struct MaterialSpec {
     pub young: f64,
     /// Poisson's ratio `ν` (−).
     pub poisson: f64,
+    /// The constitutive law beyond elasticity.
+    pub law: LawSpec,
+}
+
+/// The constitutive law of a material.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LawSpec {
+    /// Linear elasticity only.
+    Elastic,
+    /// Mohr–Coulomb + Rankine plasticity with fracture-energy softening
+    /// (DESIGN §4.3). Angles in radians.
+    MohrCoulombRankine {
+        /// Cohesion `c` (Pa).
+        cohesion: f64,
+        /// Friction angle `φ` (rad).
+        friction: f64,
+        /// Dilation angle `ψ` (rad).
+        dilation: f64,
+        /// Tensile strength `f_t` (Pa).
+        tensile_strength: f64,
+        /// Fracture energy `G_f` (N/m).
+        fracture_energy: f64,
+        /// Crack-band rule.
+        crack_band: CrackBand,
+    },
 }
 
 /// Run settings that may change between stages.
@@ -30,13 +57,7 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        Self {
-            mass_damping: 0.0,
-            stiffness_damping: 0.0,
-            safety: 0.8,
-            fixed_dt: None,
-            dt_interval: 100,
-        }
+        Self { mass_damping: 0.0, stiffness_damping: 0.0, safety: 0.8, fixed_dt: None, dt_interval: 100 }
     }
 }
 

@@ -6,7 +6,7 @@ use fdem_element::kinematics::ReferenceShape;
 use fdem_element::stability::critical_time_step;
 use fdem_element::tensor::rotate;
 use fdem_element::{internal_forces, Vec2};
-use fdem_material::Elastic;
+use fdem_material::{Elastic, Geometry, MohrCoulombRankine, PlasticState};
 use fdem_mesh::Csr;
 use rayon::prelude::*;
 
@@ -22,6 +22,17 @@ pub(crate) const NO_BC: u32 = u32::MAX;
 pub(crate) struct Material {
     pub density: f64,
     pub elastic: Elastic,
+    pub plastic: Option<MohrCoulombRankine>,
+}
+
+/// The reference edge vectors of an element (its shape in the co-rotational
+/// frame) from its stored `Dm⁻¹`.
+#[inline]
+pub(crate) fn reference_geometry(reference: &ReferenceShape) -> Geometry {
+    let m = reference.dm_inv;
+    let r = 1.0 / (m[0] * m[3] - m[1] * m[2]);
+    // Dm = (Dm⁻¹)⁻¹; its columns are X1 − X0 and X2 − X0
+    Geometry { e1: [m[3] * r, -m[2] * r], e2: [-m[1] * r, m[0] * r] }
 }
 
 /// Read-only inputs of the node pass.
@@ -47,19 +58,11 @@ pub(crate) struct NodeInputs<'a> {
 ///
 /// Modified central difference with mass damping α (DESIGN §4.2):
 /// `v^{n+½} = [(1 − αΔt/2) v^{n−½} + Δt f/m] / (1 + αΔt/2)`.
-pub(crate) fn node_pass(
-    inp: &NodeInputs<'_>,
-    x: &mut [Vec2],
-    v: &mut [Vec2],
-    partials: &mut [NodePartial],
-) {
+pub(crate) fn node_pass(inp: &NodeInputs<'_>, x: &mut [Vec2], v: &mut [Vec2], partials: &mut [NodePartial]) {
     let a = 0.5 * inp.alpha * inp.dt_avg;
     let (keep, scale) = (1.0 - a, 1.0 / (1.0 + a));
-    x.par_chunks_mut(CHUNK)
-        .zip(v.par_chunks_mut(CHUNK))
-        .zip(partials.par_iter_mut())
-        .enumerate()
-        .for_each(|(c, ((xc, vc), part))| {
+    x.par_chunks_mut(CHUNK).zip(v.par_chunks_mut(CHUNK)).zip(partials.par_iter_mut()).enumerate().for_each(
+        |(c, ((xc, vc), part))| {
             let mut acc = NodePartial::default();
             let base = c * CHUNK;
             for j in 0..xc.len() {
@@ -68,10 +71,7 @@ pub(crate) fn node_pass(
                 if m <= 0.0 {
                     continue;
                 }
-                let f_ext = [
-                    m * inp.gravity[0] + inp.aux[i][0],
-                    m * inp.gravity[1] + inp.aux[i][1],
-                ];
+                let f_ext = [m * inp.gravity[0] + inp.aux[i][0], m * inp.gravity[1] + inp.aux[i][1]];
                 let mut f = f_ext;
                 for &item in inp.node_elems.row(i) {
                     let fe = inp.elem_force[item as usize];
@@ -80,22 +80,14 @@ pub(crate) fn node_pass(
                 }
                 let v_old = vc[j];
                 let r = inp.dt_avg / m;
-                let mut v_new = [
-                    (keep * v_old[0] + r * f[0]) * scale,
-                    (keep * v_old[1] + r * f[1]) * scale,
-                ];
+                let mut v_new = [(keep * v_old[0] + r * f[0]) * scale, (keep * v_old[1] + r * f[1]) * scale];
                 let b = inp.bc[i];
                 let dxc = |vn: Vec2| {
-                    [
-                        0.5 * (inp.dt * vn[0] + inp.dt_prev * v_old[0]),
-                        0.5 * (inp.dt * vn[1] + inp.dt_prev * v_old[1]),
-                    ]
+                    [0.5 * (inp.dt * vn[0] + inp.dt_prev * v_old[0]), 0.5 * (inp.dt * vn[1] + inp.dt_prev * v_old[1])]
                 };
                 if b != NO_BC {
                     let con = &inp.constraints[b as usize];
-                    let amp = con
-                        .amplitude
-                        .map_or(1.0, |k| inp.amplitude_values[k as usize]);
+                    let amp = con.amplitude.map_or(1.0, |k| inp.amplitude_values[k as usize]);
                     for d in 0..2 {
                         if con.fixed[d] {
                             v_new[d] = con.value[d] * amp;
@@ -130,7 +122,8 @@ pub(crate) fn node_pass(
                 }
             }
             *part = acc;
-        });
+        },
+    );
 }
 
 /// Read-only inputs of the element pass.
@@ -159,15 +152,17 @@ fn gather<T: Copy>(a: &[T], t: [u32; 3]) -> [T; 3] {
 pub(crate) fn element_pass(
     inp: &ElementInputs<'_>,
     stress: &mut [[f64; 4]],
+    state: &mut [PlasticState],
     force: &mut [Vec2],
     partials: &mut [ElementPartial],
 ) {
     stress
         .par_chunks_mut(CHUNK)
+        .zip(state.par_chunks_mut(CHUNK))
         .zip(force.par_chunks_mut(3 * CHUNK))
         .zip(partials.par_iter_mut())
         .enumerate()
-        .for_each(|(c, ((sc, fc), part))| {
+        .for_each(|(c, (((sc, stc), fc), part))| {
             let mut acc = ElementPartial::default();
             let base = c * CHUNK;
             for j0 in (0..sc.len()).step_by(LANES) {
@@ -176,15 +171,11 @@ pub(crate) fn element_pass(
                 let last = sc.len() - 1;
                 let lane_elem = |l: usize| base + (j0 + l).min(last);
                 let conn: [[u32; 3]; LANES] = std::array::from_fn(|l| inp.conn[lane_elem(l)]);
-                let dm_inv = std::array::from_fn(|k| {
-                    std::array::from_fn(|l| inp.reference[lane_elem(l)].dm_inv[k])
-                });
-                let x: TriLanes = std::array::from_fn(|k| {
-                    std::array::from_fn(|l| inp.x[conn[l][k / 2] as usize][k % 2])
-                });
-                let v: TriLanes = std::array::from_fn(|k| {
-                    std::array::from_fn(|l| inp.v[conn[l][k / 2] as usize][k % 2])
-                });
+                let dm_inv = std::array::from_fn(|k| std::array::from_fn(|l| inp.reference[lane_elem(l)].dm_inv[k]));
+                let x: TriLanes =
+                    std::array::from_fn(|k| std::array::from_fn(|l| inp.x[conn[l][k / 2] as usize][k % 2]));
+                let v: TriLanes =
+                    std::array::from_fn(|k| std::array::from_fn(|l| inp.v[conn[l][k / 2] as usize][k % 2]));
                 let frames = corotational_frames(&dm_inv, &x, &v, inp.dt);
                 for l in 0..LANES.min(sc.len() - j0) {
                     let j = j0 + l;
@@ -201,20 +192,23 @@ pub(crate) fn element_pass(
                     let mat = &inp.materials[inp.material[e] as usize];
                     let dh = frames.d_hat(l);
                     let old = sc[j];
-                    let new = mat.elastic.trial(old, dh, inp.dt);
-                    sc[j] = new;
-                    let power = 0.5
-                        * ((old[0] + new[0]) * dh[0]
-                            + (old[1] + new[1]) * dh[1]
-                            + 2.0 * (old[3] + new[3]) * dh[2]);
+                    let mut new = mat.elastic.trial(old, dh, inp.dt);
                     let half_area = 0.5 * frames.twice_area_mid[l];
+                    if let Some(law) = &mat.plastic {
+                        let u = law.update(old, new, &mut stc[j], || reference_geometry(&inp.reference[e]));
+                        new = u.stress;
+                        acc.plastic += half_area * u.plastic_dissipation;
+                        acc.fracture += half_area * u.fracture_dissipation;
+                    }
+                    sc[j] = new;
+                    let power =
+                        0.5 * ((old[0] + new[0]) * dh[0] + (old[1] + new[1]) * dh[1] + 2.0 * (old[3] + new[3]) * dh[2]);
                     acc.internal += half_area * inp.dt * power;
                     let mut sigma = rotate(new, frames.cos_new[l], frames.sin_new[l]);
                     if inp.beta > 0.0 {
                         let d = frames.d(l);
                         let sv = mat.elastic.viscous(d, inp.beta);
-                        acc.viscous +=
-                            half_area * inp.dt * (sv[0] * d[0] + sv[1] * d[1] + 2.0 * sv[3] * d[2]);
+                        acc.viscous += half_area * inp.dt * (sv[0] * d[0] + sv[1] * d[1] + 2.0 * sv[3] * d[2]);
                         for k in 0..4 {
                             sigma[k] += sv[k];
                         }
@@ -263,16 +257,7 @@ pub(crate) fn stable_time_step(inp: &ElementInputs<'_>) -> f64 {
         .map(|e| {
             let mat = &inp.materials[inp.material[e] as usize];
             let x = gather(inp.x, inp.conn[e]);
-            critical_time_step(
-                &x,
-                mat.elastic.lambda,
-                mat.elastic.mu,
-                mat.density,
-                inp.beta,
-            )
+            critical_time_step(&x, mat.elastic.lambda, mat.elastic.mu, mat.density, inp.beta)
         })
-        .reduce(
-            || f64::INFINITY,
-            |a, b| if b < a || a.is_nan() { b } else { a },
-        )
+        .reduce(|| f64::INFINITY, |a, b| if b < a || a.is_nan() { b } else { a })
 }

@@ -2,19 +2,18 @@
 //! time loop and the read-out of results.
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
-use fdem_element::kinematics::{
-    deformation_gradient, polar_rotation, reference_inverse, signed_area,
-};
+use fdem_element::kinematics::{deformation_gradient, polar_rotation, reference_inverse, signed_area};
 use fdem_element::tensor::rotate;
 use fdem_element::{lumped_mass, ReferenceShape, Vec2};
-use fdem_material::Elastic;
+use fdem_material::{CrackBand, Elastic, MohrCoulombRankine, PlasticState};
 use fdem_mesh::{boundary_facets, node_elements, validate, Csr};
 
 use crate::energy::{ElementPartial, Energies, NodePartial};
 use crate::error::{RunError, SetupError};
 use crate::loads::{Amplitude, Constraint};
-use crate::model::{ModelSpec, Settings};
+use crate::model::{LawSpec, ModelSpec, Settings};
 use crate::passes::{self, ElementInputs, Material, NodeInputs, NO_BC};
 use crate::CHUNK;
 
@@ -44,6 +43,8 @@ struct Elements {
     active: Vec<bool>,
     /// Co-rotational Cauchy stress `σ̂` (Pa).
     stress: Vec<[f64; 4]>,
+    /// Plastic state (unused for elastic materials).
+    state: Vec<PlasticState>,
     /// Internal nodal forces at `xⁿ`, three per element (N).
     force: Vec<Vec2>,
 }
@@ -74,7 +75,9 @@ pub struct Simulation {
     energies: Energies,
     node_partials: Vec<NodePartial>,
     elem_partials: Vec<ElementPartial>,
-    pool: rayon::ThreadPool,
+    /// Worker threads; every public entry point that steps runs inside it
+    /// once, so the passes' parallel loops cost no cross-thread hand-off.
+    pool: Arc<rayon::ThreadPool>,
 }
 
 fn invalid<T>(msg: String) -> Result<T, SetupError> {
@@ -92,18 +95,36 @@ impl Simulation {
             return invalid("the mesh has no elements".into());
         }
         if !spec.may_coincide.is_empty() && spec.may_coincide.len() != n {
-            return invalid(format!(
-                "may_coincide has {} entries for {n} nodes",
-                spec.may_coincide.len()
-            ));
+            return invalid(format!("may_coincide has {} entries for {n} nodes", spec.may_coincide.len()));
         }
         validate(&spec.points, &spec.triangles, &spec.may_coincide)?;
         let conn: Vec<[u32; 3]> = spec.triangles.iter().map(|t| t.map(|v| v as u32)).collect();
 
         let mut materials = Vec::with_capacity(spec.materials.len());
         for (index, ms) in spec.materials.iter().enumerate() {
-            let elastic = Elastic::new(ms.young, ms.poisson)
-                .map_err(|error| SetupError::Material { index, error })?;
+            let elastic = Elastic::new(ms.young, ms.poisson).map_err(|error| SetupError::Material { index, error })?;
+            let plastic = match ms.law {
+                LawSpec::Elastic => None,
+                LawSpec::MohrCoulombRankine {
+                    cohesion,
+                    friction,
+                    dilation,
+                    tensile_strength,
+                    fracture_energy,
+                    crack_band,
+                } => Some(
+                    MohrCoulombRankine::new(
+                        elastic,
+                        cohesion,
+                        friction,
+                        dilation,
+                        tensile_strength,
+                        fracture_energy,
+                        crack_band,
+                    )
+                    .map_err(|error| SetupError::Material { index, error })?,
+                ),
+            };
             if !(ms.density > 0.0 && ms.density.is_finite()) {
                 let error = fdem_material::ParameterError {
                     parameter: "rho",
@@ -112,22 +133,12 @@ impl Simulation {
                 };
                 return Err(SetupError::Material { index, error });
             }
-            materials.push(Material {
-                density: ms.density,
-                elastic,
-            });
+            materials.push(Material { density: ms.density, elastic, plastic });
         }
         if spec.element_material.len() != m {
-            return invalid(format!(
-                "element_material has {} entries for {m} elements",
-                spec.element_material.len()
-            ));
+            return invalid(format!("element_material has {} entries for {m} elements", spec.element_material.len()));
         }
-        if let Some(e) = spec
-            .element_material
-            .iter()
-            .position(|&k| k as usize >= materials.len())
-        {
+        if let Some(e) = spec.element_material.iter().position(|&k| k as usize >= materials.len()) {
             return invalid(format!(
                 "element {e} uses material {}, but only {} materials are defined",
                 spec.element_material[e],
@@ -142,20 +153,27 @@ impl Simulation {
         let mut reference = Vec::with_capacity(m);
         let mut mass = vec![0.0; n];
         for (e, t) in conn.iter().enumerate() {
-            let x = [
-                spec.points[t[0] as usize],
-                spec.points[t[1] as usize],
-                spec.points[t[2] as usize],
-            ];
-            reference.push(reference_inverse(&x).ok_or_else(|| {
-                SetupError::Invalid(format!(
-                    "element {e} has no positive area in the reference configuration"
-                ))
-            })?);
-            let nodal = lumped_mass(
-                materials[spec.element_material[e] as usize].density,
-                signed_area(&x),
-            );
+            let x = [spec.points[t[0] as usize], spec.points[t[1] as usize], spec.points[t[2] as usize]];
+            let shape = reference_inverse(&x).ok_or_else(|| {
+                SetupError::Invalid(format!("element {e} has no positive area in the reference configuration"))
+            })?;
+            if let Some(law) = &materials[spec.element_material[e] as usize].plastic {
+                let g = passes::reference_geometry(&shape);
+                let size = match law.crack_band {
+                    CrackBand::Oliver => g.diameter(),
+                    CrackBand::Equivalent => (4.0 * g.area() / std::f64::consts::PI).sqrt(),
+                };
+                let limit = law.snap_back_size();
+                if size > limit {
+                    return invalid(format!(
+                        "element {e} is {size:.4} m across, larger than the snap-back limit 2 E' Gf / ft^2 = {limit:.4} m \
+                         of its material {}: refine the mesh there or raise Gf",
+                        spec.element_material[e]
+                    ));
+                }
+            }
+            reference.push(shape);
+            let nodal = lumped_mass(materials[spec.element_material[e] as usize].density, signed_area(&x));
             for &v in t {
                 mass[v as usize] += nodal;
             }
@@ -166,9 +184,9 @@ impl Simulation {
         }
         let n_amp = spec.amplitudes.len();
         let check_amp = |amp: Option<u32>, what: String| match amp {
-            Some(k) if k as usize >= n_amp => invalid(format!(
-                "{what} refers to amplitude {k}, but only {n_amp} are defined"
-            )),
+            Some(k) if k as usize >= n_amp => {
+                invalid(format!("{what} refers to amplitude {k}, but only {n_amp} are defined"))
+            }
             _ => Ok(()),
         };
 
@@ -176,27 +194,16 @@ impl Simulation {
         let mut merged: BTreeMap<u32, Constraint> = BTreeMap::new();
         for c in &spec.constraints {
             if c.node as usize >= n {
-                return invalid(format!(
-                    "a support refers to node {}, but the mesh has {n} nodes",
-                    c.node
-                ));
+                return invalid(format!("a support refers to node {}, but the mesh has {n} nodes", c.node));
             }
             if !c.value.iter().all(|v| v.is_finite()) {
-                return invalid(format!(
-                    "prescribed velocity of node {} is not finite",
-                    c.node
-                ));
+                return invalid(format!("prescribed velocity of node {} is not finite", c.node));
             }
             check_amp(c.amplitude, format!("the support of node {}", c.node))?;
-            let entry = merged.entry(c.node).or_insert(Constraint {
-                fixed: [false; 2],
-                ..*c
-            });
+            let entry = merged.entry(c.node).or_insert(Constraint { fixed: [false; 2], ..*c });
             for d in 0..2 {
                 if c.fixed[d] {
-                    if entry.fixed[d]
-                        && (entry.value[d] != c.value[d] || entry.amplitude != c.amplitude)
-                    {
+                    if entry.fixed[d] && (entry.value[d] != c.value[d] || entry.amplitude != c.amplitude) {
                         return invalid(format!(
                             "node {} has two different prescribed velocities in direction {}",
                             c.node,
@@ -231,9 +238,7 @@ impl Simulation {
         for p in &spec.pressures {
             let [a, b] = p.nodes;
             let Some(&dir) = facet_dir.get(&(a.min(b), a.max(b))) else {
-                return invalid(format!(
-                    "pressure facet ({a}, {b}) is not an edge on the boundary of the mesh"
-                ));
+                return invalid(format!("pressure facet ({a}, {b}) is not an edge on the boundary of the mesh"));
             };
             if !p.pressure.is_finite() {
                 return invalid(format!("pressure on facet ({a}, {b}) is not finite"));
@@ -248,15 +253,9 @@ impl Simulation {
         let mut v = vec![[0.0; 2]; n];
         if let Some(v0) = &spec.initial_velocity {
             if v0.len() != n {
-                return invalid(format!(
-                    "initial velocity has {} rows for {n} nodes",
-                    v0.len()
-                ));
+                return invalid(format!("initial velocity has {} rows for {n} nodes", v0.len()));
             }
-            if let Some(i) = v0
-                .iter()
-                .position(|p| !(p[0].is_finite() && p[1].is_finite()))
-            {
+            if let Some(i) = v0.iter().position(|p| !(p[0].is_finite() && p[1].is_finite())) {
                 return invalid(format!("initial velocity of node {i} is not finite"));
             }
             v.copy_from_slice(v0);
@@ -264,10 +263,7 @@ impl Simulation {
         let mut stress = vec![[0.0; 4]; m];
         if let Some(s0) = &spec.initial_stress {
             if s0.len() != m {
-                return invalid(format!(
-                    "initial stress has {} rows for {m} elements",
-                    s0.len()
-                ));
+                return invalid(format!("initial stress has {} rows for {m} elements", s0.len()));
             }
             if let Some(e) = s0.iter().position(|s| !s.iter().all(|c| c.is_finite())) {
                 return invalid(format!("initial stress of element {e} is not finite"));
@@ -281,20 +277,14 @@ impl Simulation {
             .map_err(|e| SetupError::Invalid(format!("cannot start {threads} threads: {e}")))?;
         let node_elems = node_elements(n, &conn);
         let mut sim = Simulation {
-            nodes: Nodes {
-                x0: spec.points.clone(),
-                x: spec.points,
-                v,
-                mass,
-                aux: vec![[0.0; 2]; n],
-                bc,
-            },
+            nodes: Nodes { x0: spec.points.clone(), x: spec.points, v, mass, aux: vec![[0.0; 2]; n], bc },
             elems: Elements {
                 conn,
                 reference,
                 material: spec.element_material,
                 active: vec![true; m],
                 stress,
+                state: vec![PlasticState::default(); m],
                 force: vec![[0.0; 2]; 3 * m],
             },
             materials,
@@ -314,11 +304,14 @@ impl Simulation {
             energies: Energies::default(),
             node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],
             elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
-            pool,
+            pool: Arc::new(pool),
         };
-        sim.apply_prescribed_initial_velocity();
-        sim.refresh_forces();
-        sim.update_time_step();
+        let pool = Arc::clone(&sim.pool);
+        pool.install(|| {
+            sim.apply_prescribed_initial_velocity();
+            sim.refresh_forces();
+            sim.update_time_step();
+        });
         sim.energies.elastic_initial = sim.elastic_energy();
         sim.energies.kinetic_initial = sim.kinetic_energy();
         Ok(sim)
@@ -329,9 +322,7 @@ impl Simulation {
     fn apply_prescribed_initial_velocity(&mut self) {
         self.eval_amplitudes(self.time);
         for c in &self.constraints {
-            let amp = c
-                .amplitude
-                .map_or(1.0, |k| self.amplitude_values[k as usize]);
+            let amp = c.amplitude.map_or(1.0, |k| self.amplitude_values[k as usize]);
             for d in 0..2 {
                 if c.fixed[d] {
                     self.nodes.v[c.node as usize][d] = c.value[d] * amp;
@@ -363,13 +354,7 @@ impl Simulation {
     /// Recomputes element and surface forces at the current configuration
     /// without advancing the stress.
     fn refresh_forces(&mut self) {
-        let Simulation {
-            nodes,
-            elems,
-            pool,
-            elem_partials,
-            ..
-        } = self;
+        let Simulation { nodes, elems, elem_partials, .. } = self;
         let inp = ElementInputs {
             x: &nodes.x,
             v: &nodes.v,
@@ -381,9 +366,7 @@ impl Simulation {
             beta: 0.0,
             dt: 0.0,
         };
-        pool.install(|| {
-            passes::element_pass(&inp, &mut elems.stress, &mut elems.force, elem_partials)
-        });
+        passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, elem_partials);
         self.eval_amplitudes(self.time);
         passes::pressure_forces(
             &self.nodes.x,
@@ -399,10 +382,7 @@ impl Simulation {
         let inp = self.element_inputs(0.0);
         let crit = self.pool.install(|| passes::stable_time_step(&inp));
         self.dt_critical = crit;
-        self.dt = self
-            .settings
-            .fixed_dt
-            .unwrap_or(self.settings.safety * crit);
+        self.dt = self.settings.fixed_dt.unwrap_or(self.settings.safety * crit);
     }
 
     /// Advances one step.
@@ -411,13 +391,7 @@ impl Simulation {
         let dt_avg = 0.5 * (self.dt_prev + dt);
         self.eval_amplitudes(self.time + 0.5 * dt);
         {
-            let Simulation {
-                nodes,
-                elems,
-                pool,
-                node_partials,
-                ..
-            } = self;
+            let Simulation { nodes, elems, node_partials, .. } = self;
             let inp = NodeInputs {
                 mass: &nodes.mass,
                 aux: &nodes.aux,
@@ -432,7 +406,7 @@ impl Simulation {
                 dt,
                 dt_prev: self.dt_prev,
             };
-            pool.install(|| passes::node_pass(&inp, &mut nodes.x, &mut nodes.v, node_partials));
+            passes::node_pass(&inp, &mut nodes.x, &mut nodes.v, node_partials);
         }
         self.time += dt;
         self.step += 1;
@@ -445,21 +419,10 @@ impl Simulation {
             bad_node = bad_node.or(p.bad_node);
         }
         if let Some((node, quantity)) = bad_node {
-            return Err(RunError::NonFinite {
-                node,
-                quantity,
-                step: self.step,
-                time: self.time,
-            });
+            return Err(RunError::NonFinite { node, quantity, step: self.step, time: self.time });
         }
         {
-            let Simulation {
-                nodes,
-                elems,
-                pool,
-                elem_partials,
-                ..
-            } = self;
+            let Simulation { nodes, elems, elem_partials, .. } = self;
             let inp = ElementInputs {
                 x: &nodes.x,
                 v: &nodes.v,
@@ -471,9 +434,7 @@ impl Simulation {
                 beta: self.settings.stiffness_damping,
                 dt,
             };
-            pool.install(|| {
-                passes::element_pass(&inp, &mut elems.stress, &mut elems.force, elem_partials)
-            });
+            passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, elem_partials);
         }
         let mut bad_element = None;
         for p in &self.elem_partials {
@@ -484,11 +445,7 @@ impl Simulation {
             bad_element = bad_element.or(p.bad_element);
         }
         if let Some(element) = bad_element {
-            return Err(RunError::InvertedElement {
-                element,
-                step: self.step,
-                time: self.time,
-            });
+            return Err(RunError::InvertedElement { element, step: self.step, time: self.time });
         }
         self.eval_amplitudes(self.time);
         passes::pressure_forces(
@@ -506,10 +463,13 @@ impl Simulation {
 
     /// Advances `steps` steps, or until an error.
     pub fn step(&mut self, steps: u64) -> Result<(), RunError> {
-        for _ in 0..steps {
-            self.step_once()?;
-        }
-        Ok(())
+        let pool = Arc::clone(&self.pool);
+        pool.install(|| {
+            for _ in 0..steps {
+                self.step_once()?;
+            }
+            Ok(())
+        })
     }
 
     /// Advances until the time reaches `until` (s) or `max_steps` steps were
@@ -517,12 +477,15 @@ impl Simulation {
     /// shortened to land on `until`: a run's result does not depend on how
     /// often it is stopped for output.
     pub fn advance(&mut self, until: f64, max_steps: u64) -> Result<u64, RunError> {
-        let mut taken = 0;
-        while self.time < until && taken < max_steps {
-            self.step_once()?;
-            taken += 1;
-        }
-        Ok(taken)
+        let pool = Arc::clone(&self.pool);
+        pool.install(|| {
+            let mut taken = 0;
+            while self.time < until && taken < max_steps {
+                self.step_once()?;
+                taken += 1;
+            }
+            Ok(taken)
+        })
     }
 
     /// Replaces the run settings (damping, safety, fixed step) between stages.
@@ -535,11 +498,7 @@ impl Simulation {
 
     /// Sets the prescribed velocity values of constrained nodes (m/s); every
     /// node must already carry a constraint on the components it sets.
-    pub fn set_prescribed_velocity(
-        &mut self,
-        nodes: &[u32],
-        values: &[Vec2],
-    ) -> Result<(), SetupError> {
+    pub fn set_prescribed_velocity(&mut self, nodes: &[u32], values: &[Vec2]) -> Result<(), SetupError> {
         for (&node, &value) in nodes.iter().zip(values) {
             let b = self.nodes.bc.get(node as usize).copied().unwrap_or(NO_BC);
             if b == NO_BC {
@@ -651,10 +610,7 @@ impl Simulation {
     /// Net force on node `i` at the current configuration (N).
     fn net_force(&self, i: usize) -> Vec2 {
         let m = self.nodes.mass[i];
-        let mut f = [
-            m * self.gravity[0] + self.nodes.aux[i][0],
-            m * self.gravity[1] + self.nodes.aux[i][1],
-        ];
+        let mut f = [m * self.gravity[0] + self.nodes.aux[i][0], m * self.gravity[1] + self.nodes.aux[i][1]];
         for &item in self.node_elems.row(i) {
             let fe = self.elems.force[item as usize];
             f[0] -= fe[0];
@@ -666,11 +622,7 @@ impl Simulation {
     /// Rotation `R` (cos, sin) of element `e` at the current configuration.
     fn rotation(&self, e: usize) -> (f64, f64) {
         let t = self.elems.conn[e];
-        let x = [
-            self.nodes.x[t[0] as usize],
-            self.nodes.x[t[1] as usize],
-            self.nodes.x[t[2] as usize],
-        ];
+        let x = [self.nodes.x[t[0] as usize], self.nodes.x[t[1] as usize], self.nodes.x[t[2] as usize]];
         polar_rotation(deformation_gradient(&self.elems.reference[e], &x))
     }
 
@@ -684,17 +636,61 @@ impl Simulation {
             .collect()
     }
 
+    /// Plastic state of every element (co-rotational frame; defaults for
+    /// elastic materials).
+    pub fn plastic_states(&self) -> &[PlasticState] {
+        &self.elems.state
+    }
+
+    /// Failure factor `F = κ H / f_t` of every element (eq. 2.21); 0 for
+    /// elastic materials.
+    pub fn failure_factors(&self) -> Vec<f64> {
+        (0..self.n_elements())
+            .map(|e| match &self.materials[self.elems.material[e] as usize].plastic {
+                Some(law) => law.failure_factor(&self.elems.state[e]),
+                None => 0.0,
+            })
+            .collect()
+    }
+
+    /// Direction of σ1 at the last tensile plastic step of every element in
+    /// the current frame (rad from x): the rotating crack's normal.
+    pub fn crack_directions(&self) -> Vec<f64> {
+        (0..self.n_elements())
+            .map(|e| {
+                let (c, s) = self.rotation(e);
+                let a = self.elems.state[e].direction + s.atan2(c);
+                // a direction, not an orientation: keep it in (−π/2, π/2]
+                let half = std::f64::consts::FRAC_PI_2;
+                if a > half {
+                    a - std::f64::consts::PI
+                } else if a <= -half {
+                    a + std::f64::consts::PI
+                } else {
+                    a
+                }
+            })
+            .collect()
+    }
+
+    /// Plastic strain of every element rotated to the current frame,
+    /// `[xx, yy, zz, xy]` (tensor shear).
+    pub fn plastic_strain(&self) -> Vec<[f64; 4]> {
+        (0..self.n_elements())
+            .map(|e| {
+                let (c, s) = self.rotation(e);
+                rotate(self.elems.state[e].plastic_strain, c, s)
+            })
+            .collect()
+    }
+
     /// Current element areas (m²).
     pub fn areas(&self) -> Vec<f64> {
         self.elems
             .conn
             .iter()
             .map(|t| {
-                signed_area(&[
-                    self.nodes.x[t[0] as usize],
-                    self.nodes.x[t[1] as usize],
-                    self.nodes.x[t[2] as usize],
-                ])
+                signed_area(&[self.nodes.x[t[0] as usize], self.nodes.x[t[1] as usize], self.nodes.x[t[2] as usize]])
             })
             .collect()
     }
@@ -705,12 +701,7 @@ impl Simulation {
         let per_chunk: Vec<f64> = v
             .chunks(CHUNK)
             .zip(self.nodes.mass.chunks(CHUNK))
-            .map(|(vc, mc)| {
-                vc.iter()
-                    .zip(mc)
-                    .map(|(v, m)| 0.5 * m * (v[0] * v[0] + v[1] * v[1]))
-                    .sum()
-            })
+            .map(|(vc, mc)| vc.iter().zip(mc).map(|(v, m)| 0.5 * m * (v[0] * v[0] + v[1] * v[1])).sum())
             .collect();
         per_chunk.iter().sum()
     }
@@ -774,22 +765,13 @@ impl Simulation {
 
 fn check_settings(s: &Settings) -> Result<(), SetupError> {
     if !(s.mass_damping >= 0.0 && s.mass_damping.is_finite()) {
-        return invalid(format!(
-            "mass damping alpha = {} must be finite and >= 0",
-            s.mass_damping
-        ));
+        return invalid(format!("mass damping alpha = {} must be finite and >= 0", s.mass_damping));
     }
     if !(s.stiffness_damping >= 0.0 && s.stiffness_damping.is_finite()) {
-        return invalid(format!(
-            "stiffness damping beta = {} must be finite and >= 0",
-            s.stiffness_damping
-        ));
+        return invalid(format!("stiffness damping beta = {} must be finite and >= 0", s.stiffness_damping));
     }
     if !(s.safety > 0.0 && s.safety <= 1.0) {
-        return invalid(format!(
-            "time-step safety factor = {} must lie in (0, 1]",
-            s.safety
-        ));
+        return invalid(format!("time-step safety factor = {} must lie in (0, 1]", s.safety));
     }
     if let Some(dt) = s.fixed_dt {
         if !(dt > 0.0 && dt.is_finite()) {

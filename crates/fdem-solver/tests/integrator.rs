@@ -1,6 +1,6 @@
 //! Integration tests of the time loop on tiny meshes with closed-form answers.
 
-use fdem_solver::{Constraint, MaterialSpec, ModelSpec, PressureLoad, Settings, Simulation};
+use fdem_solver::{Constraint, LawSpec, MaterialSpec, ModelSpec, PressureLoad, Settings, Simulation};
 
 /// A unit square of `n × n` cells split into right triangles.
 fn square(n: usize, size: f64) -> (Vec<[f64; 2]>, Vec<[u64; 3]>) {
@@ -28,11 +28,7 @@ fn spec(n: usize) -> ModelSpec {
     ModelSpec {
         points,
         triangles,
-        materials: vec![MaterialSpec {
-            density: 2000.0,
-            young: 1e9,
-            poisson: 0.25,
-        }],
+        materials: vec![MaterialSpec { density: 2000.0, young: 1e9, poisson: 0.25, law: LawSpec::Elastic }],
         element_material: vec![0; m],
         ..Default::default()
     }
@@ -44,21 +40,13 @@ fn free_fall_is_exact_for_constant_acceleration() {
     // y(t) = ½ g t², with no stress developing in a rigidly falling body.
     let mut s = spec(2);
     s.gravity = [0.0, -9.81];
-    s.settings = Settings {
-        fixed_dt: Some(1e-4),
-        ..Default::default()
-    };
+    s.settings = Settings { fixed_dt: Some(1e-4), ..Default::default() };
     let mut sim = Simulation::new(s, 1).unwrap();
     sim.step(1000).unwrap();
     let t = sim.time();
     let y0 = sim.reference_positions()[0][1];
     let y = sim.positions()[0][1];
-    assert!(
-        (y - y0 - (-0.5 * 9.81 * t * t)).abs() < 1e-12,
-        "{} vs {}",
-        y - y0,
-        -0.5 * 9.81 * t * t
-    );
+    assert!((y - y0 - (-0.5 * 9.81 * t * t)).abs() < 1e-12, "{} vs {}", y - y0, -0.5 * 9.81 * t * t);
     let v = sim.velocities()[0][1];
     assert!((v + 9.81 * t).abs() < 1e-10);
     for st in sim.stress() {
@@ -66,10 +54,7 @@ fn free_fall_is_exact_for_constant_acceleration() {
     }
     // gravity work equals the kinetic energy gained (rigid body)
     let e = sim.energies();
-    assert!(
-        (e.external_work - e.kinetic).abs() < 1e-6 * e.kinetic,
-        "{e:?}"
-    );
+    assert!((e.external_work - e.kinetic).abs() < 1e-6 * e.kinetic, "{e:?}");
 }
 
 #[test]
@@ -78,11 +63,7 @@ fn mass_damping_decays_a_free_body_geometrically() {
     let mut s = spec(1);
     s.initial_velocity = Some(vec![[1.0, 0.0]; 4]);
     let (alpha, dt) = (50.0, 1e-4);
-    s.settings = Settings {
-        mass_damping: alpha,
-        fixed_dt: Some(dt),
-        ..Default::default()
-    };
+    s.settings = Settings { mass_damping: alpha, fixed_dt: Some(dt), ..Default::default() };
     let mut sim = Simulation::new(s, 1).unwrap();
     sim.step(200).unwrap();
     let r: f64 = (1.0 - 0.5 * alpha * dt) / (1.0 + 0.5 * alpha * dt);
@@ -91,10 +72,7 @@ fn mass_damping_decays_a_free_body_geometrically() {
     let expected_half = r0 * r.powi(199);
     let v_whole = sim.velocities()[0][0];
     let expected_whole = expected_half / (1.0 + 0.5 * alpha * dt);
-    assert!(
-        (v_whole - expected_whole).abs() < 1e-12,
-        "{v_whole} vs {expected_whole}"
-    );
+    assert!((v_whole - expected_whole).abs() < 1e-12, "{v_whole} vs {expected_whole}");
     let e = sim.energies();
     assert!(e.residual().abs() < 1e-3 * e.kinetic_initial, "{e:?}");
 }
@@ -109,30 +87,13 @@ fn supports_hold_and_pressure_compresses() {
     let p = 1e6;
     let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
     for i in 0..=n {
-        s.constraints.push(Constraint {
-            node: id(i, 0),
-            fixed: [false, true],
-            value: [0.0; 2],
-            amplitude: None,
-        });
-        s.constraints.push(Constraint {
-            node: id(0, i),
-            fixed: [true, false],
-            value: [0.0; 2],
-            amplitude: None,
-        });
+        s.constraints.push(Constraint { node: id(i, 0), fixed: [false, true], value: [0.0; 2], amplitude: None });
+        s.constraints.push(Constraint { node: id(0, i), fixed: [true, false], value: [0.0; 2], amplitude: None });
     }
     for i in 0..n {
-        s.pressures.push(PressureLoad {
-            nodes: [id(i, n), id(i + 1, n)],
-            pressure: p,
-            amplitude: None,
-        });
+        s.pressures.push(PressureLoad { nodes: [id(i, n), id(i + 1, n)], pressure: p, amplitude: None });
     }
-    s.settings = Settings {
-        mass_damping: 2000.0,
-        ..Default::default()
-    };
+    s.settings = Settings { mass_damping: 2000.0, ..Default::default() };
     let mut sim = Simulation::new(s, 2).unwrap();
     sim.advance(0.02, u64::MAX).unwrap();
     for st in sim.stress() {
@@ -145,21 +106,12 @@ fn supports_hold_and_pressure_compresses() {
 #[test]
 fn bad_input_names_the_entity() {
     let mut s = spec(1);
-    s.constraints.push(Constraint {
-        node: 99,
-        fixed: [true, true],
-        value: [0.0; 2],
-        amplitude: None,
-    });
+    s.constraints.push(Constraint { node: 99, fixed: [true, true], value: [0.0; 2], amplitude: None });
     let e = Simulation::new(s, 1).err().unwrap().to_string();
     assert!(e.contains("node 99"), "{e}");
     let mut s = spec(1);
     // the diagonal (0, 3) is interior
-    s.pressures.push(PressureLoad {
-        nodes: [0, 3],
-        pressure: 1.0,
-        amplitude: None,
-    });
+    s.pressures.push(PressureLoad { nodes: [0, 3], pressure: 1.0, amplitude: None });
     let e = Simulation::new(s, 1).err().unwrap().to_string();
     assert!(e.contains("(0, 3)") && e.contains("boundary"), "{e}");
     let mut s = spec(1);
@@ -173,16 +125,8 @@ fn inverted_element_stops_the_run() {
     // Drive corner node 3 = (1, 1) down through the bottom edge of element
     // 0 = (0, 1, 3), which flattens first.
     let mut s = spec(1);
-    s.constraints.push(Constraint {
-        node: 3,
-        fixed: [true, true],
-        value: [0.0, -2000.0],
-        amplitude: None,
-    });
-    s.settings = Settings {
-        fixed_dt: Some(1e-5),
-        ..Default::default()
-    };
+    s.constraints.push(Constraint { node: 3, fixed: [true, true], value: [0.0, -2000.0], amplitude: None });
+    s.settings = Settings { fixed_dt: Some(1e-5), ..Default::default() };
     let mut sim = Simulation::new(s, 1).unwrap();
     let err = sim.advance(1.0, 1_000_000).unwrap_err();
     match err {
@@ -199,18 +143,9 @@ fn same_bits_for_any_thread_count() {
     let run = |threads| {
         let mut s = spec(40);
         s.gravity = [0.0, -9.81];
-        s.initial_velocity = Some(
-            (0..s.points.len())
-                .map(|i| [((i * 7) % 13) as f64 * 0.01, 0.0])
-                .collect(),
-        );
+        s.initial_velocity = Some((0..s.points.len()).map(|i| [((i * 7) % 13) as f64 * 0.01, 0.0]).collect());
         for i in 0..=40u32 {
-            s.constraints.push(Constraint {
-                node: i,
-                fixed: [true, true],
-                value: [0.0; 2],
-                amplitude: None,
-            });
+            s.constraints.push(Constraint { node: i, fixed: [true, true], value: [0.0; 2], amplitude: None });
         }
         s.settings.mass_damping = 1.0;
         let mut sim = Simulation::new(s, threads).unwrap();
