@@ -131,7 +131,9 @@ pub struct MohrCoulombRankine {
     sin_phi: f64,
     cos_phi: f64,
     sin_psi: f64,
-    /// `C n_β` of each plane (constant for these linear surfaces).
+    /// Potential gradient `n_β` of each plane (constant for these linear surfaces).
+    n: [[f64; 3]; 6],
+    /// `C n_β` of each plane.
     cn: [[f64; 3]; 6],
     /// `a_α · C n_β` of each pair of planes.
     acn: [[f64; 6]; 6],
@@ -258,11 +260,13 @@ impl MohrCoulombRankine {
             sin_phi: friction.sin(),
             cos_phi: friction.cos(),
             sin_psi: dilation.sin(),
+            n: [[0.0; 3]; 6],
             cn: [[0.0; 3]; 6],
             acn: [[0.0; 6]; 6],
         };
         for (j, &b) in ALL.iter().enumerate() {
-            law.cn[j] = law.c_times(law.gradients(b).1);
+            law.n[j] = law.gradients(b).1;
+            law.cn[j] = law.c_times(law.n[j]);
         }
         for (i, &b) in ALL.iter().enumerate() {
             let a = law.gradients(b).0;
@@ -391,6 +395,26 @@ impl MohrCoulombRankine {
         if active == P13 | P23 | R1 | R2 {
             return self.left_edge_tensile_corner(s, kappa, sy, h);
         }
+        if active.count_ones() == 1 {
+            // one plane (bit k is plane k of ALL): a single division
+            let k = active.trailing_zeros() as usize;
+            let tensile = k >= 3;
+            let g = self.acn[k][k] - if tensile { h } else { 0.0 };
+            if !(g > 0.0) {
+                return None;
+            }
+            let x = self.yield_functions(s, sy)[k] / g;
+            let cn = &self.cn[k];
+            let mut multipliers = [0.0; 6];
+            multipliers[k] = x;
+            let dk = if tensile { x } else { 0.0 };
+            return Some(PrincipalReturn {
+                stress: [s[0] - x * cn[0], s[1] - x * cn[1], s[2] - x * cn[2]],
+                multipliers,
+                kappa: kappa + dk,
+                strength: sy - h * dk,
+            });
+        }
         // plane indices (positions in ALL) of the active set
         let mut idx = [0usize; MAX];
         let mut n = 0;
@@ -415,15 +439,7 @@ impl MohrCoulombRankine {
                 }
             }
         }
-        let x = if n == 1 {
-            // one plane: a single division
-            if g[0][0] <= 0.0 {
-                return None;
-            }
-            [rhs[0] / g[0][0], 0.0, 0.0, 0.0]
-        } else {
-            solve(g, rhs, n)?
-        };
+        let x = solve(g, rhs, n)?;
         let mut out = s;
         let mut multipliers = [0.0; 6];
         let mut dk = 0.0;
@@ -465,15 +481,17 @@ impl MohrCoulombRankine {
     /// Whether a return is admissible: multipliers ≥ 0, every yield
     /// function ≤ 0 and the principal order kept, within `tol` (Pa).
     pub fn is_consistent(&self, r: &PrincipalReturn, tol: f64) -> bool {
+        // written with `&=` over comparisons so that a NaN anywhere fails
         let g2 = 2.0 * self.elastic.mu;
-        if r.multipliers.iter().any(|&x| x * g2 < -tol || !x.is_finite()) {
-            return false;
-        }
         let s = r.stress;
-        if s[0] < s[1] - tol || s[1] < s[2] - tol {
-            return false;
+        let mut ok = s[0] >= s[1] - tol && s[1] >= s[2] - tol;
+        for x in r.multipliers {
+            ok &= x * g2 >= -tol;
         }
-        self.yield_functions(s, r.strength).iter().all(|&f| f <= tol)
+        for f in self.yield_functions(s, r.strength) {
+            ok &= f <= tol;
+        }
+        ok
     }
 
     /// Stress tolerance of the consistency checks for trial `s` (Pa).
@@ -501,11 +519,14 @@ impl MohrCoulombRankine {
         let tol = self.tolerance(s);
         // before the first crack κ = 0 and the strength is f_t whatever the band
         let band = if state.crack_band > 0.0 { state.crack_band } else { 1.0 };
-        let f = self.yield_functions(s, self.strength(state.kappa, band).0);
-        if f[0] <= tol && f[3] <= tol {
+        // σ1 ≥ σ2 ≥ σ3 makes the main plane and the σ1 plane the largest of
+        // their families: the point is elastic if both are inside
+        let main = s[0] * (1.0 + self.sin_phi) - s[2] * (1.0 - self.sin_phi) - 2.0 * self.cohesion * self.cos_phi;
+        let tensile = s[0] - self.strength(state.kappa, band).0;
+        if main <= tol && tensile <= tol {
             return Update { stress: trial, active: 0, plastic_dissipation: 0.0, fracture_dissipation: 0.0 };
         }
-        if state.crack_band == 0.0 && f[3] > tol {
+        if state.crack_band == 0.0 && tensile > tol {
             let geometry = geometry();
             state.crack_band = match self.crack_band {
                 CrackBand::Oliver => geometry.width_along(sp.angle()),
@@ -531,43 +552,35 @@ impl MohrCoulombRankine {
         // plastic strain increments in principal space, split MC / tensile
         let mut de_mc = [0.0; 3];
         let mut de_t = [0.0; 3];
-        for (k, &b) in ALL.iter().enumerate() {
+        for k in 0..6 {
             let x = r.multipliers[k];
             if x == 0.0 {
                 continue;
             }
-            let (_, n) = self.gradients(b);
-            let target = if b & RANKINE != 0 { &mut de_t } else { &mut de_mc };
+            let target = if k >= 3 { &mut de_t } else { &mut de_mc };
             for i in 0..3 {
-                target[i] += x * n[i];
+                target[i] += x * self.n[k][i];
             }
         }
         let [a, b, zz] = order.unsort(r.stress);
         let stress = sp.compose(a, b, zz);
-        let to_tensor = |d: [f64; 3]| {
-            let [a, b, zz] = order.unsort(d);
-            sp.compose(a, b, zz)
-        };
-        let (e_mc, e_t) = (to_tensor(de_mc), to_tensor(de_t));
-        let mid = [
-            0.5 * (old[0] + stress[0]),
-            0.5 * (old[1] + stress[1]),
-            0.5 * (old[2] + stress[2]),
-            0.5 * (old[3] + stress[3]),
-        ];
-        let work = |e: [f64; 4]| mid[0] * e[0] + mid[1] * e[1] + mid[2] * e[2] + 2.0 * mid[3] * e[3];
-        let mut total = [0.0; 4];
+        // Δεᵖ is coaxial with the trial, so ½(σⁿ + σⁿ⁺¹) : Δεᵖ only needs the
+        // normal components of σⁿ on the trial's principal axes
+        let old_on_axes = order.sort_like(sp.normal_components(old));
+        let work = |d: [f64; 3]| (0..3).map(|k| 0.5 * (old_on_axes[k] + r.stress[k]) * d[k]).sum::<f64>();
+        let total = [de_mc[0] + de_t[0], de_mc[1] + de_t[1], de_mc[2] + de_t[2]];
+        let [ta, tb, tz] = order.unsort(total);
+        let increment = sp.compose(ta, tb, tz);
         for k in 0..4 {
-            total[k] = e_mc[k] + e_t[k];
-            state.plastic_strain[k] += total[k];
+            state.plastic_strain[k] += increment[k];
         }
-        let sq = de_mc.iter().zip(&de_t).map(|(m, t)| (m + t) * (m + t)).sum::<f64>();
+        let sq = total[0] * total[0] + total[1] * total[1] + total[2] * total[2];
         state.equivalent_plastic_strain += (2.0 / 3.0 * sq).sqrt();
         if active & RANKINE != 0 {
             state.kappa = r.kappa;
             state.direction = sp.angle();
         }
-        Update { stress, active, plastic_dissipation: work(e_mc), fracture_dissipation: work(e_t) }
+        Update { stress, active, plastic_dissipation: work(de_mc), fracture_dissipation: work(de_t) }
     }
 
     /// Fallback when no candidate is consistent within tolerance (a round-off

@@ -34,6 +34,15 @@ impl Spectral {
         [m + h * self.cos2, m - h * self.cos2, zz, h * self.sin2]
     }
 
+    /// Normal components of another tensor `t` on these principal axes:
+    /// `[n_a·t·n_a, n_b·t·n_b, t_zz]`.
+    #[inline]
+    pub fn normal_components(&self, t: [f64; 4]) -> [f64; 3] {
+        let (m, h) = (0.5 * (t[0] + t[1]), 0.5 * (t[0] - t[1]));
+        let r = h * self.cos2 + t[3] * self.sin2;
+        [m + r, m - r, t[2]]
+    }
+
     /// Angle θ (rad, in `(−π/2, π/2]`) of the direction of `a` from x.
     #[inline]
     pub fn angle(&self) -> f64 {
@@ -62,6 +71,12 @@ impl Order {
         }
     }
 
+    /// Orders `[a, b, zz]`-slotted values the way the sort did.
+    #[inline]
+    pub fn sort_like(&self, v: [f64; 3]) -> [f64; 3] {
+        [v[self.slot[0] as usize], v[self.slot[1] as usize], v[self.slot[2] as usize]]
+    }
+
     /// Puts sorted values back as `[a, b, zz]`.
     #[inline]
     pub fn unsort(&self, s: [f64; 3]) -> [f64; 3] {
@@ -88,6 +103,10 @@ mod tests {
         let (sorted, order) = Order::sort(s.a, s.b, t[2]);
         assert!(sorted[0] >= sorted[1] && sorted[1] >= sorted[2]);
         assert_eq!(order.unsort(sorted), [s.a, s.b, t[2]]);
+        assert_eq!(order.sort_like([s.a, s.b, t[2]]), sorted);
+        // a tensor's normal components on its own axes are its principal values
+        let n = s.normal_components(t);
+        assert!((n[0] - s.a).abs() < 1e-14 && (n[1] - s.b).abs() < 1e-14);
     }
 
     #[test]
