@@ -400,7 +400,7 @@ impl MohrCoulombRankine {
             let k = active.trailing_zeros() as usize;
             let tensile = k >= 3;
             let g = self.acn[k][k] - if tensile { h } else { 0.0 };
-            if !(g > 0.0) {
+            if g.is_nan() || g <= 0.0 {
                 return None;
             }
             let x = self.yield_functions(s, sy)[k] / g;
