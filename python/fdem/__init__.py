@@ -18,6 +18,8 @@ Typical use::
 from . import errors
 from ._core import __version__
 from .errors import InvertedElementError, NonFiniteError, SimulationError
+from .contact import Interface
+from .joints import JointSet, jointed_rectangle
 from .laboratory import MaterialPointResult, material_point
 from .materials import Elastic, MohrCoulombRankine
 from .mesh import Mesh, gmsh_rectangle
@@ -30,7 +32,9 @@ __all__ = [
     "Elastic",
     "MaterialPointResult",
     "MohrCoulombRankine",
+    "Interface",
     "InvertedElementError",
+    "JointSet",
     "Mesh",
     "Model",
     "NonFiniteError",
@@ -40,6 +44,7 @@ __all__ = [
     "__version__",
     "errors",
     "gmsh_rectangle",
+    "jointed_rectangle",
     "material_point",
     "principal_stresses",
     "write_vtu",

@@ -7,12 +7,26 @@ import numpy as np
 from numpy.typing import NDArray
 
 __version__: str
-__all__ = ["Simulation", "validate_mesh", "material_point", "_panic_selftest", "__version__"]
+__all__ = [
+    "Simulation",
+    "validate_mesh",
+    "material_point",
+    "triangulate",
+    "split_along_edges",
+    "_panic_selftest",
+    "__version__",
+]
 
 def validate_mesh(
     points: NDArray[np.float64], triangles: NDArray[np.int64], may_coincide: NDArray[np.bool_]
 ) -> None: ...
 def _panic_selftest() -> None: ...
+def triangulate(
+    outline: NDArray[np.float64], segments: NDArray[np.float64], max_area: float, min_angle: float, max_nodes: int
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]: ...
+def split_along_edges(
+    n_nodes: int, triangles: NDArray[np.int64], cut: NDArray[np.int64]
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]: ...
 def material_point(
     material: dict[str, Any],
     initial_stress: tuple[float, float, float, float],
@@ -42,6 +56,11 @@ class Simulation:
         amplitudes: list[tuple[list[float], list[float]]] = ...,
         initial_velocity: NDArray[np.float64] | None = None,
         initial_stress: NDArray[np.float64] | None = None,
+        contact_laws: NDArray[np.float64] | None = None,
+        contact_facets: NDArray[np.int64] | None = None,
+        contact_facet_laws: NDArray[np.int64] | None = None,
+        crack_law: int = 0,
+        contact_margin: float | None = None,
         mass_damping: float = 0.0,
         stiffness_damping: float = 0.0,
         safety: float = 0.8,
@@ -78,4 +97,7 @@ class Simulation:
     def areas(self) -> NDArray[np.float64]: ...
     def active(self) -> NDArray[np.bool_]: ...
     def element_state(self) -> dict[str, Any]: ...
+    def contact_stats(self) -> dict[str, int]: ...
+    def contacts(self) -> dict[str, Any]: ...
+    def surface_facets(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]: ...
     def energies(self) -> dict[str, Any]: ...

@@ -11,7 +11,7 @@ triangle mesh meshio understands (gmsh ``.msh``, ``.vtu``…) with
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from types import MappingProxyType
 from typing import Any
 
@@ -177,6 +177,55 @@ class Mesh:
             facet_sets={**self._facet_sets, **(facet_sets or {})},
             element_sets={**self._element_sets, **(element_sets or {})},
             interface_nodes=self._interface,
+        )
+
+    @classmethod
+    def combine(cls, *parts: Mesh, prefixes: Sequence[str] | None = None) -> Mesh:
+        """Several meshes as one model of separate bodies (e.g. a block on a
+        base). Nodes of different parts that coincide stay separate and are
+        marked as interface nodes, so the bodies meet by contact. Groups keep
+        their names, prefixed by ``prefixes[i]`` if given; groups of the same
+        name are merged.
+        """
+        if not parts:
+            raise ValueError("combine needs at least one mesh")
+        if prefixes is not None and len(prefixes) != len(parts):
+            raise ValueError("prefixes must have one entry per mesh")
+        points, tris, ifaces = [], [], []
+        sets: dict[str, dict[str, list[Any]]] = {"node": {}, "facet": {}, "element": {}}
+        n_off = e_off = 0
+        for i, m in enumerate(parts):
+            if not isinstance(m, Mesh):
+                raise ValueError(f"part {i} is not a fdem.Mesh")
+            pre = prefixes[i] if prefixes is not None else ""
+            points.append(m.points)
+            tris.append(m.triangles + n_off)
+            ifaces.append(m.interface_nodes)
+            for kind, groups, off in (
+                ("node", m.node_sets, n_off),
+                ("facet", m.facet_sets, n_off),
+                ("element", m.element_sets, e_off),
+            ):
+                for name, ids in groups.items():
+                    sets[kind].setdefault(pre + name, []).append(ids + off)
+            n_off += m.n_nodes
+            e_off += m.n_elements
+        pts = np.concatenate(points)
+        iface = np.concatenate(ifaces)
+        # coincident nodes of different parts become interface nodes
+        part_of = np.concatenate([np.full(m.n_nodes, i) for i, m in enumerate(parts)])
+        order = np.lexsort((pts[:, 1], pts[:, 0]))
+        same = np.all(pts[order[1:]] == pts[order[:-1]], axis=1) & (part_of[order[1:]] != part_of[order[:-1]])
+        iface[order[1:][same]] = True
+        iface[order[:-1][same]] = True
+        merged = {kind: {k: np.concatenate(v) for k, v in groups.items()} for kind, groups in sets.items()}
+        return cls(
+            pts,
+            np.concatenate(tris),
+            node_sets=merged["node"],
+            facet_sets=merged["facet"],
+            element_sets=merged["element"],
+            interface_nodes=iface,
         )
 
     # --- derived ----------------------------------------------------------

@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._checks import float_array, number
+from ._checks import float_array, number, positive
+from .contact import Interface
 from .materials import Elastic, MohrCoulombRankine
 from .mesh import Mesh
 
@@ -138,6 +139,7 @@ class Model:
         self._pressures: list[_Pressure] = []
         self._initial_velocity: NDArray[np.float64] | None = None
         self._initial_stress: NDArray[np.float64] | None = None
+        self._contact: dict[str, Any] | None = None
 
     @staticmethod
     def _check_material(name: str, m: Any) -> None:
@@ -217,6 +219,54 @@ class Model:
         if amplitude is not None and not isinstance(amplitude, Amplitude):
             raise ValueError("amplitude must be a fdem.Amplitude")
         self._pressures.append(_Pressure(self.mesh.facets(facets), number("p", p), amplitude))
+        return self
+
+    def contact(
+        self,
+        default: Interface | None = None,
+        *,
+        interfaces: Mapping[str, Interface] | None = None,
+        cracks: Interface | None = None,
+        margin: float | None = None,
+    ) -> Model:
+        """Switches on contact between all free surfaces (DESIGN §4.5).
+
+        Parameters
+        ----------
+        default : Interface
+            The law of free boundaries (every facet not named below).
+        interfaces : mapping of facet-set name to Interface
+            Laws of named interfaces, e.g. ``{"joints": Interface(friction=33,
+            cohesion=50e3)}`` for the faces of joint sets.
+        cracks : Interface
+            The law of crack faces inserted during the run (default: the
+            default law).
+        margin : float, optional
+            Broad-phase box enlargement (m); default a fifth of the mean facet
+            length. The candidate list is rebuilt when a node has moved half
+            of it.
+        """
+        default = default if default is not None else Interface()
+        laws: list[Interface] = [default]
+        named: dict[str, int] = {}
+        for name, law in (interfaces or {}).items():
+            if not isinstance(law, Interface):
+                raise ValueError(f"interfaces['{name}'] must be a fdem.Interface")
+            self.mesh.facets(name)
+            if law not in laws:
+                laws.append(law)
+            named[name] = laws.index(law)
+        if cracks is not None and not isinstance(cracks, Interface):
+            raise ValueError("cracks must be a fdem.Interface")
+        crack = cracks if cracks is not None else default
+        if crack not in laws:
+            laws.append(crack)
+        self._contact = {
+            "laws": laws,
+            "named": named,
+            "crack": laws.index(crack),
+            "margin": None if margin is None else positive("margin", margin),
+        }
         return self
 
     # --- initial state ----------------------------------------------------
@@ -329,6 +379,20 @@ class Model:
                 constraint_fixed=np.ascontiguousarray(np.concatenate(cf).astype(bool)),
                 constraint_values=np.concatenate(cv).astype(np.float64),
                 constraint_amplitude=np.concatenate(ca),
+            )
+        if self._contact is not None:
+            young = max(m.E for m in self._materials)
+            bf = self.mesh.boundary_facets()
+            size = float(np.linalg.norm(np.diff(self.mesh.points[bf], axis=1), axis=2).mean())
+            c = self._contact
+            facets = [self.mesh.facets(name) for name in c["named"]]
+            laws = [np.full(len(f), law, dtype=np.int64) for f, law in zip(facets, c["named"].values(), strict=True)]
+            out.update(
+                contact_laws=np.array([law._kernel_row(young, size) for law in c["laws"]], dtype=np.float64),
+                contact_facets=np.concatenate(facets) if facets else np.zeros((0, 2), dtype=np.int64),
+                contact_facet_laws=np.concatenate(laws) if laws else np.zeros(0, dtype=np.int64),
+                crack_law=c["crack"],
+                contact_margin=c["margin"],
             )
         if pf:
             out.update(

@@ -169,6 +169,23 @@ class Simulation:
         current frame) and ``equivalent_plastic_strain``."""
         return dict(self._core.element_state())
 
+    def contacts(self) -> dict[str, NDArray[Any]]:
+        """The active contacts: ``node``, ``facet`` (n, 2) node pairs, ``xi``
+        (position on the facet), ``gap`` (m, negative = penetration),
+        ``normal_force`` and ``tangential_force`` (N/m), ``slipping``."""
+        return dict(self._core.contacts())
+
+    def contact_stats(self) -> dict[str, int]:
+        """Contact-search counters: ``pairs_evaluated`` (candidate pairs, all
+        steps), ``broad_phase_builds``, ``candidate_pairs`` (now),
+        ``contacts`` (now)."""
+        return dict(self._core.contact_stats())
+
+    def surface_facets(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """The free-surface facets (n, 2), body on their left, and the index of
+        each one's interface law (0: free boundary)."""
+        return self._core.surface_facets()
+
     def energies(self) -> dict[str, float]:
         """The energy account (J per unit thickness): ``kinetic``, ``elastic``,
         ``external_work``, ``support_work``, damping and dissipation terms,

@@ -10,9 +10,13 @@
 //!   that let the solver gather per node in a fixed order.
 //! * [`validate`]: checks of user meshes that name the offending entity.
 //! * [`edges`]: unique edges, their adjacent elements and the free facets.
+//! * [`generate`]: quality meshes conforming to segments (joint traces).
+//! * [`split`]: opening edges into interfaces by duplicating nodes.
 
 pub mod csr;
 pub mod edges;
+pub mod generate;
+pub mod split;
 pub mod validate;
 
 pub use csr::Csr;

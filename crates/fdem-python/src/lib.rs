@@ -16,7 +16,8 @@ use pyo3::types::PyDict;
 
 use fdem_solver::material_point::{material_point as drive_point, Path};
 use fdem_solver::{
-    Amplitude, Constraint, CrackBand, LawSpec, MaterialSpec, ModelSpec, PressureLoad, RunError, Settings,
+    Amplitude, Constraint, ContactSpec, CrackBand, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, PressureLoad,
+    RunError, Settings,
 };
 
 /// Runs `f`, turning a panic into a `RuntimeError`.
@@ -170,6 +171,7 @@ impl PySimulation {
         constraint_nodes=None, constraint_fixed=None, constraint_values=None, constraint_amplitude=None,
         pressure_facets=None, pressure_values=None, pressure_amplitude=None,
         amplitudes=Vec::new(), initial_velocity=None, initial_stress=None,
+        contact_laws=None, contact_facets=None, contact_facet_laws=None, crack_law=0, contact_margin=None,
         mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, threads=0
     ))]
     fn new(
@@ -189,6 +191,11 @@ impl PySimulation {
         amplitudes: Vec<(Vec<f64>, Vec<f64>)>,
         initial_velocity: Option<PyReadonlyArray2<'_, f64>>,
         initial_stress: Option<PyReadonlyArray2<'_, f64>>,
+        contact_laws: Option<PyReadonlyArray2<'_, f64>>,
+        contact_facets: Option<PyReadonlyArray2<'_, i64>>,
+        contact_facet_laws: Option<PyReadonlyArray1<'_, i64>>,
+        crack_law: u16,
+        contact_margin: Option<f64>,
         mass_damping: f64,
         stiffness_damping: f64,
         safety: f64,
@@ -259,6 +266,36 @@ impl PySimulation {
                     });
                 }
             }
+            let contact = match contact_laws {
+                None => None,
+                Some(laws) => {
+                    let laws =
+                        rows::<5>("contact_laws", &laws)?
+                            .into_iter()
+                            .map(|[normal_stiffness, shear_stiffness, friction, cohesion, damping_ratio]| {
+                                InterfaceSpec { normal_stiffness, shear_stiffness, friction, cohesion, damping_ratio }
+                            })
+                            .collect();
+                    let mut facet_laws = Vec::new();
+                    if let (Some(f), Some(l)) = (contact_facets, contact_facet_laws) {
+                        let f = int_rows::<2>("contact_facets", &f)?;
+                        let l = l.as_array();
+                        if l.len() != f.len() {
+                            return Err(value_error("contact_facets and contact_facet_laws must have equal lengths"));
+                        }
+                        for i in 0..f.len() {
+                            let law = u16::try_from(l[i]).map_err(|_| {
+                                value_error(format!("contact_facet_laws[{i}] = {} is not a law index", l[i]))
+                            })?;
+                            facet_laws.push((
+                                [to_u32("contact_facets", i, f[i][0])?, to_u32("contact_facets", i, f[i][1])?],
+                                law,
+                            ));
+                        }
+                    }
+                    Some(ContactSpec { laws, facet_laws, crack_law, margin: contact_margin })
+                }
+            };
             let spec = ModelSpec {
                 points,
                 triangles,
@@ -271,6 +308,7 @@ impl PySimulation {
                 amplitudes: amplitudes.into_iter().map(|(times, values)| Amplitude { times, values }).collect(),
                 initial_velocity: initial_velocity.map(|a| rows::<2>("initial_velocity", &a)).transpose()?,
                 initial_stress: initial_stress.map(|a| rows::<4>("initial_stress", &a)).transpose()?,
+                contact,
                 settings: Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval },
             };
             let sim = fdem_solver::Simulation::new(spec, threads).map_err(|e| value_error(e.to_string()))?;
@@ -441,6 +479,47 @@ impl PySimulation {
         self.sim.active().to_vec().into_pyarray(py)
     }
 
+    /// Contact-search counters: `pairs_evaluated`, `broad_phase_builds`,
+    /// `candidate_pairs`, `contacts`.
+    fn contact_stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let c = self.sim.contact_stats();
+        let d = PyDict::new(py);
+        d.set_item("pairs_evaluated", c.pairs_evaluated)?;
+        d.set_item("broad_phase_builds", c.broad_phase_builds)?;
+        d.set_item("candidate_pairs", c.candidate_pairs)?;
+        d.set_item("contacts", c.contacts)?;
+        Ok(d)
+    }
+
+    /// The active contacts as a dict of arrays: `node`, `facet` (n, 2), `xi`,
+    /// `gap` (m), `normal_force`, `tangential_force` (N/m), `slipping`.
+    fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        guard(|| {
+            let c = self.sim.contacts();
+            let d = PyDict::new(py);
+            d.set_item("node", c.iter().map(|t| t.0 as i64).collect::<Vec<_>>().into_pyarray(py))?;
+            let facets: Vec<i64> = c.iter().flat_map(|t| [t.1[0] as i64, t.1[1] as i64]).collect();
+            d.set_item("facet", Array2::from_shape_vec((c.len(), 2), facets).expect("shape").into_pyarray(py))?;
+            d.set_item("xi", c.iter().map(|t| t.2).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("gap", c.iter().map(|t| t.3).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("normal_force", c.iter().map(|t| t.4).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("tangential_force", c.iter().map(|t| t.5).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("slipping", c.iter().map(|t| t.6).collect::<Vec<_>>().into_pyarray(py))?;
+            Ok(d)
+        })
+    }
+
+    /// The free-surface facets (n, 2), oriented with the body on the left,
+    /// and the interface law of each.
+    fn surface_facets<'py>(&self, py: Python<'py>) -> (Bound<'py, PyArray2<i64>>, Bound<'py, PyArray1<i64>>) {
+        let f = self.sim.surface_facets();
+        let nodes: Vec<i64> = f.iter().flat_map(|(n, _)| [n[0] as i64, n[1] as i64]).collect();
+        (
+            Array2::from_shape_vec((f.len(), 2), nodes).expect("shape").into_pyarray(py),
+            f.iter().map(|(_, l)| *l as i64).collect::<Vec<_>>().into_pyarray(py),
+        )
+    }
+
     /// Per-element material state as a dict of arrays: `kappa` (fracturing
     /// strain), `crack_band` (m), `failure_factor`, `crack_direction` (rad,
     /// current frame), `plastic_strain` (n, 4, current frame),
@@ -478,6 +557,10 @@ impl PySimulation {
             d.set_item("plastic", e.plastic)?;
             d.set_item("fracture", e.fracture)?;
             d.set_item("internal_work", e.internal_work)?;
+            d.set_item("friction", e.friction)?;
+            d.set_item("contact_damping", e.contact_damping)?;
+            d.set_item("contact_elastic", e.contact_elastic)?;
+            d.set_item("contact_work", e.contact_work)?;
             d.set_item("residual", e.residual())?;
             Ok(d)
         })
@@ -540,6 +623,77 @@ fn material_point<'py>(
     })
 }
 
+/// Meshes a polygon with line segments embedded (constrained Delaunay with
+/// refinement): returns `(points (n, 2), triangles (m, 3), constraint edges
+/// (k, 2))`. See `fdem_mesh::generate::triangulate`.
+#[pyfunction]
+fn triangulate<'py>(
+    py: Python<'py>,
+    outline: PyReadonlyArray2<'py, f64>,
+    segments: PyReadonlyArray2<'py, f64>,
+    max_area: f64,
+    min_angle: f64,
+    max_nodes: usize,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>, Bound<'py, PyArray2<i64>>)> {
+    guard(|| {
+        let outline = rows::<2>("outline", &outline)?;
+        let segs: Vec<[[f64; 2]; 2]> =
+            rows::<4>("segments", &segments)?.into_iter().map(|[a, b, c, d]| [[a, b], [c, d]]).collect();
+        let g = fdem_solver::mesh::triangulate(&outline, &segs, max_area, min_angle, max_nodes)
+            .map_err(|e| value_error(e.to_string()))?;
+        let tri: Vec<i64> = g.triangles.iter().flatten().map(|&v| v as i64).collect();
+        let ce: Vec<i64> = g.constraint_edges.iter().flatten().map(|&v| v as i64).collect();
+        Ok((
+            vec2_array(py, &g.points),
+            Array2::from_shape_vec((g.triangles.len(), 3), tri).expect("shape").into_pyarray(py),
+            Array2::from_shape_vec((g.constraint_edges.len(), 2), ce).expect("shape").into_pyarray(py),
+        ))
+    })
+}
+
+/// Opens edges into interfaces by duplicating nodes: returns the new
+/// triangles and, for every appended node, its parent. See
+/// `fdem_mesh::split::split_along_edges`.
+#[pyfunction]
+fn split_along_edges<'py>(
+    py: Python<'py>,
+    n_nodes: usize,
+    triangles: PyReadonlyArray2<'py, i64>,
+    cut: PyReadonlyArray2<'py, i64>,
+) -> PyResult<(Bound<'py, PyArray2<i64>>, Bound<'py, PyArray1<i64>>)> {
+    guard(|| {
+        let mut t: Vec<[u32; 3]> = int_rows::<3>("triangles", &triangles)?
+            .into_iter()
+            .enumerate()
+            .map(|(e, r)| {
+                let ok = r.iter().all(|&v| v >= 0 && (v as usize) < n_nodes);
+                if ok {
+                    Ok(r.map(|v| v as u32))
+                } else {
+                    Err(value_error(format!("element {e} refers to a node out of range")))
+                }
+            })
+            .collect::<PyResult<_>>()?;
+        let cut: Vec<[u32; 2]> = int_rows::<2>("cut", &cut)?
+            .into_iter()
+            .enumerate()
+            .map(|(i, r)| {
+                if r.iter().all(|&v| v >= 0 && (v as usize) < n_nodes) {
+                    Ok(r.map(|v| v as u32))
+                } else {
+                    Err(value_error(format!("cut edge {i} refers to a node out of range")))
+                }
+            })
+            .collect::<PyResult<_>>()?;
+        let parents = fdem_solver::mesh::split_along_edges(n_nodes, &mut t, &cut);
+        let flat: Vec<i64> = t.iter().flatten().map(|&v| v as i64).collect();
+        Ok((
+            Array2::from_shape_vec((t.len(), 3), flat).expect("shape").into_pyarray(py),
+            parents.into_iter().map(|p| p as i64).collect::<Vec<_>>().into_pyarray(py),
+        ))
+    })
+}
+
 /// Diagnostic: panics inside the guard, to show that a kernel panic reaches
 /// Python as `RuntimeError` (used by the test suite).
 #[pyfunction]
@@ -553,6 +707,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PySimulation>()?;
     m.add_function(wrap_pyfunction!(validate_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(material_point, m)?)?;
+    m.add_function(wrap_pyfunction!(triangulate, m)?)?;
+    m.add_function(wrap_pyfunction!(split_along_edges, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_selftest, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

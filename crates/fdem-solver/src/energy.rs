@@ -29,6 +29,15 @@ pub struct Energies {
     pub plastic: f64,
     /// Dissipated by tensile softening (fracture).
     pub fracture: f64,
+    /// Dissipated by friction (slip) on contacts.
+    pub friction: f64,
+    /// Dissipated by the contact dashpots.
+    pub contact_damping: f64,
+    /// Elastic energy in the contact penalty springs now.
+    pub contact_elastic: f64,
+    /// Work done on the nodes by contact forces (a diagnostic: ideally
+    /// `−(contact_elastic + friction + contact_damping)`).
+    pub contact_work: f64,
     /// Internal work `∫ σ : D dV dt` done on the elements; equals the elastic
     /// energy change plus plastic and fracture dissipation up to the
     /// integration error (a diagnostic).
@@ -43,9 +52,17 @@ impl Energies {
         supplied - self.kinetic - self.elastic - self.dissipated()
     }
 
-    /// Everything dissipated so far: damping, plastic flow, fracture.
+    /// Everything dissipated or held outside the elements so far: damping,
+    /// plastic flow, fracture, friction, contact damping, and the energy
+    /// in the contact springs.
     pub fn dissipated(&self) -> f64 {
-        self.mass_damping + self.viscous_damping + self.plastic + self.fracture
+        self.mass_damping
+            + self.viscous_damping
+            + self.plastic
+            + self.fracture
+            + self.friction
+            + self.contact_damping
+            + self.contact_elastic
     }
 }
 
@@ -53,6 +70,8 @@ impl Energies {
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct NodePartial {
     pub external: f64,
+    pub contact: f64,
+    pub contact_damping: f64,
     pub support: f64,
     pub damping: f64,
     pub bad_node: Option<(u32, &'static str)>,

@@ -17,22 +17,35 @@
 //! first bad entity) are reduced in chunk order, so a run is bit-for-bit the
 //! same for any number of threads.
 
+mod contact;
 mod energy;
 mod error;
 mod loads;
 pub mod material_point;
 mod model;
 mod passes;
+mod readout;
+mod setup;
 mod simulation;
+mod topology;
 
 pub use energy::Energies;
 pub use error::{RunError, SetupError};
 pub use fdem_material::{CrackBand, PlasticState};
 pub use fdem_mesh::validate as validate_mesh;
+
+/// Mesh generation and editing, re-exported for the bindings.
+pub mod mesh {
+    pub use fdem_mesh::generate::{triangulate, GenerateError, Generated};
+    pub use fdem_mesh::split::split_along_edges;
+}
 pub use loads::{Amplitude, Constraint, PressureLoad};
-pub use model::{LawSpec, MaterialSpec, ModelSpec, Settings};
-pub use simulation::Simulation;
+pub use model::{ContactSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Settings};
+pub use simulation::{ContactStats, Simulation};
 
 /// Nodes or elements per parallel work item. Fixed, so that partial sums
 /// (and therefore results) do not depend on the thread count.
 pub const CHUNK: usize = 1024;
+
+/// Marks "none" in index arrays.
+pub(crate) const NONE: u32 = u32::MAX;

@@ -87,6 +87,39 @@ pub struct ModelSpec {
     pub initial_velocity: Option<Vec<[f64; 2]>>,
     /// Initial element stresses `[xx, yy, zz, xy]` (Pa), if any.
     pub initial_stress: Option<Vec<[f64; 4]>>,
+    /// Contact between free surfaces, if enabled.
+    pub contact: Option<ContactSpec>,
     /// Run settings.
     pub settings: Settings,
+}
+
+/// Contact between the free surfaces (DESIGN §4.5).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactSpec {
+    /// Interface laws; law 0 applies to every facet not listed in
+    /// `facet_laws` (free boundaries).
+    pub laws: Vec<InterfaceSpec>,
+    /// Facets (node pairs, either order) with another law than 0, e.g. the
+    /// faces of joints.
+    pub facet_laws: Vec<([u32; 2], u16)>,
+    /// Law of the faces of cracks inserted during the run.
+    pub crack_law: u16,
+    /// Broad-phase box enlargement (m); default a fifth of the mean facet
+    /// length.
+    pub margin: Option<f64>,
+}
+
+/// The parameters of one interface law, per unit thickness.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InterfaceSpec {
+    /// Normal stiffness `k_n` (Pa/m): contact pressure per unit penetration.
+    pub normal_stiffness: f64,
+    /// Shear stiffness `k_s` (Pa/m).
+    pub shear_stiffness: f64,
+    /// Friction coefficient `μ = tan φ` (−).
+    pub friction: f64,
+    /// Cohesion (Pa).
+    pub cohesion: f64,
+    /// Damping ratio of the normal dashpot (−).
+    pub damping_ratio: f64,
 }

@@ -3,7 +3,7 @@
 
 use fdem_element::batch::{corotational_frames, TriLanes, LANES};
 use fdem_element::kinematics::ReferenceShape;
-use fdem_element::stability::critical_time_step;
+use fdem_element::stability::max_frequency;
 use fdem_element::tensor::rotate;
 use fdem_element::{internal_forces, Vec2};
 use fdem_material::{Elastic, Geometry, MohrCoulombRankine, PlasticState};
@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use crate::energy::{ElementPartial, NodePartial};
 use crate::loads::Constraint;
-use crate::CHUNK;
+use crate::{CHUNK, NONE};
 
 /// Marks a node without constraint in `Nodes::bc`.
 pub(crate) const NO_BC: u32 = u32::MAX;
@@ -38,7 +38,14 @@ pub(crate) fn reference_geometry(reference: &ReferenceShape) -> Geometry {
 /// Read-only inputs of the node pass.
 pub(crate) struct NodeInputs<'a> {
     pub mass: &'a [f64],
-    pub aux: &'a [Vec2],
+    /// Index of each node among the boundary nodes, or `NONE`.
+    pub bnode: &'a [u32],
+    /// Surface-load (pressure) forces per boundary node (N).
+    pub pressure: &'a [Vec2],
+    /// Contact forces per boundary node (N), or empty without contact.
+    pub contact: &'a [Vec2],
+    /// The contact-dashpot parts of `contact` (N).
+    pub contact_damping: &'a [Vec2],
     pub bc: &'a [u32],
     pub node_elems: &'a Csr,
     pub elem_force: &'a [Vec2],
@@ -71,8 +78,20 @@ pub(crate) fn node_pass(inp: &NodeInputs<'_>, x: &mut [Vec2], v: &mut [Vec2], pa
                 if m <= 0.0 {
                     continue;
                 }
-                let f_ext = [m * inp.gravity[0] + inp.aux[i][0], m * inp.gravity[1] + inp.aux[i][1]];
-                let mut f = f_ext;
+                let bn = inp.bnode[i];
+                let (fp, fc, fd) = if bn == NONE {
+                    ([0.0; 2], [0.0; 2], [0.0; 2])
+                } else {
+                    let b = bn as usize;
+                    let zero = [0.0; 2];
+                    (
+                        inp.pressure[b],
+                        inp.contact.get(b).copied().unwrap_or(zero),
+                        inp.contact_damping.get(b).copied().unwrap_or(zero),
+                    )
+                };
+                let f_ext = [m * inp.gravity[0] + fp[0], m * inp.gravity[1] + fp[1]];
+                let mut f = [f_ext[0] + fc[0], f_ext[1] + fc[1]];
                 for &item in inp.node_elems.row(i) {
                     let fe = inp.elem_force[item as usize];
                     f[0] -= fe[0];
@@ -105,6 +124,8 @@ pub(crate) fn node_pass(inp: &NodeInputs<'_>, x: &mut [Vec2], v: &mut [Vec2], pa
                 }
                 let dx = dxc(v_new);
                 acc.external += f_ext[0] * dx[0] + f_ext[1] * dx[1];
+                acc.contact += fc[0] * dx[0] + fc[1] * dx[1];
+                acc.contact_damping += fd[0] * dx[0] + fd[1] * dx[1];
                 if inp.alpha > 0.0 {
                     let vm = [0.5 * (v_old[0] + v_new[0]), 0.5 * (v_old[1] + v_new[1])];
                     acc.damping += inp.alpha * m * (vm[0] * dx[0] + vm[1] * dx[1]);
@@ -221,43 +242,52 @@ pub(crate) fn element_pass(
         });
 }
 
-/// Follower pressure forces on the current configuration into `aux`
-/// (sequential: the loaded facets are few and the order stays fixed).
-/// `facets` are oriented with the body on their left.
-pub(crate) fn pressure_forces(
-    x: &[Vec2],
-    facets: &[([u32; 2], f64, Option<u32>)],
-    amplitude_values: &[f64],
-    touched: &[u32],
-    aux: &mut [Vec2],
-) {
-    for &n in touched {
-        aux[n as usize] = [0.0; 2];
-    }
-    for &([a, b], p, amp) in facets {
-        let p = p * amp.map_or(1.0, |k| amplitude_values[k as usize]);
-        let (xa, xb) = (x[a as usize], x[b as usize]);
+/// A pressure-loaded facet, resolved: its nodes (body on the left), their
+/// boundary-node indices, the pressure (Pa) and its amplitude.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PressureFacet {
+    pub nodes: [u32; 2],
+    pub bnodes: [u32; 2],
+    pub pressure: f64,
+    pub amplitude: Option<u32>,
+}
+
+/// Follower pressure forces on the current configuration into `out` (one
+/// entry per boundary node, zeroed first). Sequential: the loaded facets are
+/// few, and the order stays fixed.
+pub(crate) fn pressure_forces(x: &[Vec2], facets: &[PressureFacet], amplitude_values: &[f64], out: &mut [Vec2]) {
+    out.iter_mut().for_each(|f| *f = [0.0; 2]);
+    for pf in facets {
+        let p = pf.pressure * pf.amplitude.map_or(1.0, |k| amplitude_values[k as usize]);
+        let (xa, xb) = (x[pf.nodes[0] as usize], x[pf.nodes[1] as usize]);
         // outward normal × length = (dy, −dx); the force pushes inward
         let f = [-0.5 * p * (xb[1] - xa[1]), 0.5 * p * (xb[0] - xa[0])];
-        for n in [a, b] {
-            aux[n as usize][0] += f[0];
-            aux[n as usize][1] += f[1];
+        for b in pf.bnodes {
+            out[b as usize][0] += f[0];
+            out[b as usize][1] += f[1];
         }
     }
 }
 
-/// Smallest critical step over the active elements (s), at the current
-/// configuration, before the safety factor. `min` is exact and
+/// Highest frequency `ω_e` of every active element (0 for inactive ones)
+/// into `omega`, and the smallest critical step `2/ω_e` reduced for
+/// stiffness damping (s), before the safety factor. `min` is exact and
 /// order-independent, so the result does not depend on the thread count.
-pub(crate) fn stable_time_step(inp: &ElementInputs<'_>) -> f64 {
-    (0..inp.conn.len())
-        .into_par_iter()
+pub(crate) fn element_frequencies(inp: &ElementInputs<'_>, omega: &mut [f64]) -> f64 {
+    omega
+        .par_iter_mut()
+        .enumerate()
         .with_min_len(CHUNK)
-        .filter(|&e| inp.active[e])
-        .map(|e| {
+        .map(|(e, w)| {
+            if !inp.active[e] {
+                *w = 0.0;
+                return f64::INFINITY;
+            }
             let mat = &inp.materials[inp.material[e] as usize];
             let x = gather(inp.x, inp.conn[e]);
-            critical_time_step(&x, mat.elastic.lambda, mat.elastic.mu, mat.density, inp.beta)
+            *w = max_frequency(&x, mat.elastic.lambda, mat.elastic.mu, mat.density);
+            let xi = 0.5 * inp.beta * *w;
+            2.0 / *w * ((1.0 + xi * xi).sqrt() - xi)
         })
         .reduce(|| f64::INFINITY, |a, b| if b < a || a.is_nan() { b } else { a })
 }

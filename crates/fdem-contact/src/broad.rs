@@ -1,0 +1,206 @@
+//! Broad phase: which (node, facet) pairs can touch before the next
+//! rebuild, from a parry2d BVH of facet boxes enlarged by a margin.
+//!
+//! A facet box enlarged by `margin` holds every node within `margin` of the
+//! facet (in the box sense). Until some boundary node has moved more than
+//! `margin / 2` since the last build, no pair outside the list can have come
+//! into contact, so the list is reused step after step (a Verlet list). The
+//! list holds, per boundary node, its candidate facets in ascending order,
+//! whatever the tree layout, so results do not depend on the thread count
+//! or on whether the tree was rebuilt or refitted.
+
+use parry2d_f64::bounding_volume::Aabb;
+use parry2d_f64::math::Vector;
+use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
+use rayon::prelude::*;
+
+use fdem_mesh::Csr;
+
+use crate::surface::Surface;
+use crate::{Vec2, CHUNK};
+
+/// Refits between full rebuilds (a refit keeps the tree's topology, whose
+/// quality decays as facets move).
+const REFITS_PER_REBUILD: u32 = 16;
+
+/// The broad phase and its candidate list.
+pub struct BroadPhase {
+    /// Box enlargement (m).
+    pub margin: f64,
+    bvh: Bvh,
+    boxes: Vec<Aabb>,
+    /// Positions of the boundary nodes at the last build.
+    built_at: Vec<Vec2>,
+    /// Candidate facets of every boundary node.
+    pub candidates: Csr,
+    chunk_lists: Vec<Vec<u32>>,
+    chunk_counts: Vec<Vec<u32>>,
+    refits: u32,
+    /// Builds (rebuilds and refits) so far.
+    pub builds: u64,
+    fresh: bool,
+}
+
+impl BroadPhase {
+    /// An empty broad phase with box enlargement `margin` (m); the first
+    /// [`update`](Self::update) builds it.
+    pub fn new(margin: f64) -> Self {
+        Self {
+            margin,
+            bvh: Bvh::new(),
+            boxes: Vec::new(),
+            built_at: Vec::new(),
+            candidates: Csr::default(),
+            chunk_lists: Vec::new(),
+            chunk_counts: Vec::new(),
+            refits: 0,
+            builds: 0,
+            fresh: true,
+        }
+    }
+
+    /// Forgets the tree (after a topology change): the next update rebuilds.
+    pub fn invalidate(&mut self) {
+        self.fresh = true;
+    }
+
+    /// Whether some boundary node has moved more than half the margin since
+    /// the last build.
+    pub fn needs_update(&self, surface: &Surface, x: &[Vec2]) -> bool {
+        if self.fresh || self.built_at.len() != surface.nodes.len() {
+            return true;
+        }
+        let limit = 0.25 * self.margin * self.margin;
+        surface.nodes.par_iter().zip(self.built_at.par_iter()).with_min_len(CHUNK).any(|(&n, b)| {
+            let p = x[n as usize];
+            let (dx, dy) = (p[0] - b[0], p[1] - b[1]);
+            !(dx * dx + dy * dy <= limit)
+        })
+    }
+
+    /// Rebuilds (or refits) the tree and the candidate list if needed;
+    /// returns whether it did.
+    pub fn update(&mut self, surface: &Surface, x: &[Vec2]) -> bool {
+        if !self.needs_update(surface, x) {
+            return false;
+        }
+        self.build(surface, x);
+        true
+    }
+
+    /// Builds the tree and candidate list now.
+    pub fn build(&mut self, surface: &Surface, x: &[Vec2]) {
+        let m = self.margin;
+        let nf = surface.facets.len();
+        self.boxes.resize(nf, Aabb::new_invalid());
+        self.boxes.par_iter_mut().zip(surface.facets.par_iter()).with_min_len(CHUNK).for_each(|(bx, f)| {
+            let (a, b) = (x[f.nodes[0] as usize], x[f.nodes[1] as usize]);
+            *bx = Aabb::new(
+                Vector::new(a[0].min(b[0]) - m, a[1].min(b[1]) - m),
+                Vector::new(a[0].max(b[0]) + m, a[1].max(b[1]) + m),
+            );
+        });
+        if self.fresh || self.refits >= REFITS_PER_REBUILD || self.bvh.leaf_count() as usize != nf {
+            self.bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &self.boxes);
+            self.refits = 0;
+        } else {
+            for (k, bx) in self.boxes.iter().enumerate() {
+                self.bvh.insert_or_update_partially(*bx, k as u32, 0.0);
+            }
+            self.bvh.refit_without_opt();
+            self.refits += 1;
+        }
+        self.fresh = false;
+        self.builds += 1;
+        self.built_at.clear();
+        self.built_at.extend(surface.nodes.iter().map(|&n| x[n as usize]));
+        // query every boundary node, chunk by chunk, into reused buffers
+        let n_chunks = surface.nodes.len().div_ceil(CHUNK);
+        self.chunk_lists.resize_with(n_chunks, Vec::new);
+        self.chunk_counts.resize_with(n_chunks, Vec::new);
+        let bvh = &self.bvh;
+        surface
+            .nodes
+            .par_chunks(CHUNK)
+            .zip(self.chunk_lists.par_iter_mut().zip(self.chunk_counts.par_iter_mut()))
+            .for_each(|(nodes, (list, counts))| {
+                list.clear();
+                counts.clear();
+                for &n in nodes {
+                    let p = x[n as usize];
+                    let q = Aabb::new(Vector::new(p[0], p[1]), Vector::new(p[0], p[1]));
+                    let start = list.len();
+                    for k in bvh.intersect_aabb(&q) {
+                        let f = surface.facets[k as usize].nodes;
+                        if f[0] != n && f[1] != n {
+                            list.push(k);
+                        }
+                    }
+                    list[start..].sort_unstable();
+                    counts.push((list.len() - start) as u32);
+                }
+            });
+        let cand = &mut self.candidates;
+        cand.offsets.clear();
+        cand.items.clear();
+        cand.offsets.push(0);
+        let mut total = 0u32;
+        for (list, counts) in self.chunk_lists.iter().zip(&self.chunk_counts) {
+            for &c in counts {
+                total += c;
+                cand.offsets.push(total);
+            }
+            cand.items.extend_from_slice(list);
+        }
+    }
+
+    /// Number of candidate pairs in the list.
+    pub fn pairs(&self) -> usize {
+        self.candidates.items.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two unit squares side by side with a 0.05 m gap.
+    fn two_squares() -> (Surface, Vec<Vec2>) {
+        let x =
+            vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [1.05, 0.0], [2.05, 0.0], [2.05, 1.0], [1.05, 1.0]];
+        let facets: Vec<([u32; 2], u16)> = vec![
+            ([0, 1], 0),
+            ([1, 2], 0),
+            ([2, 3], 0),
+            ([3, 0], 0),
+            ([4, 5], 0),
+            ([5, 6], 0),
+            ([6, 7], 0),
+            ([7, 4], 0),
+        ];
+        let apex = vec![[0.5, 0.5]; 8];
+        (Surface::new(8, &facets, &x, &apex), x)
+    }
+
+    #[test]
+    fn candidates_within_margin_only() {
+        let (s, x) = two_squares();
+        let mut bp = BroadPhase::new(0.1);
+        assert!(bp.update(&s, &x));
+        // node 1 (1, 0) is within 0.1 of the left facet (7, 4) of the right square
+        let row = |n: usize| bp.candidates.row(s.index_of[n] as usize).to_vec();
+        assert!(row(1).contains(&7));
+        assert!(!row(1).contains(&0) && !row(1).contains(&1));
+        // with a small margin, nothing across the gap
+        let mut tight = BroadPhase::new(0.01);
+        tight.update(&s, &x);
+        assert!(!tight.candidates.row(s.index_of[1] as usize).contains(&7));
+        // no rebuild until something moves half the margin
+        assert!(!bp.update(&s, &x));
+        let mut moved = x.clone();
+        moved[5][0] += 0.049;
+        assert!(!bp.needs_update(&s, &moved));
+        moved[5][0] += 0.002;
+        assert!(bp.update(&s, &moved));
+    }
+}

@@ -1,0 +1,36 @@
+//! Contact between the free surfaces of an FDEM model (paper 2.1 and
+//! appendix D, DESIGN §4.5).
+//!
+//! The contact crate knows no material: it receives node positions,
+//! velocities and masses, the boundary facets with the index of their
+//! interface law, and returns nodal forces.
+//!
+//! * [`law`]: interface laws (penalties, Coulomb friction, cohesion,
+//!   damping) and the friction update of appendix D.
+//! * [`surface`]: the free surfaces of the current mesh: facets, boundary
+//!   nodes, tributary lengths.
+//! * [`broad`]: candidate (node, facet) pairs from a parry2d BVH of facet
+//!   boxes enlarged by a margin, kept until some node has moved more than
+//!   half the margin.
+//! * [`narrow`]: node-to-segment projection, penetration, forces spread to
+//!   the facet's nodes by its shape functions (eq. 2.7), assembly.
+
+pub mod broad;
+pub mod law;
+pub mod narrow;
+pub mod surface;
+
+pub use broad::BroadPhase;
+pub use law::{InterfaceLaw, LawError};
+pub use narrow::{ContactState, NodeContact};
+pub use surface::{Surface, SurfaceFacet};
+
+/// A 2D vector `[x, y]`.
+pub type Vec2 = [f64; 2];
+
+/// Boundary nodes (or facets) per parallel work item; fixed so that sums do
+/// not depend on the thread count.
+pub const CHUNK: usize = 1024;
+
+/// Marks "none" in index arrays.
+pub const NONE: u32 = u32::MAX;

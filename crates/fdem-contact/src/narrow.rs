@@ -1,0 +1,335 @@
+//! Narrow phase: node-to-segment penalty contact (paper 2.1, eqs. 2.3–2.7)
+//! with Coulomb friction and cohesion (appendix D) and a compression-only
+//! normal dashpot.
+
+use rayon::prelude::*;
+
+use fdem_mesh::Csr;
+
+use crate::law::{friction_update, InterfaceLaw};
+use crate::surface::Surface;
+use crate::{Vec2, CHUNK, NONE};
+
+/// Slack on the projection parameter `ξ` (fraction of the facet): a node a
+/// little past the end of a surface still bears on its last facet (its
+/// projection clamped to the end). Without it, the end nodes of a joint
+/// whose two sides drift apart by round-off-sized shear (a micron) drop out
+/// of contact and the rock beside the joint's end carries nothing.
+const XI_SLACK: f64 = 0.05;
+
+/// Two adjacent facets whose normals differ by less than 30° continue one
+/// surface; more is a corner.
+const SMOOTH_COS: f64 = 0.866;
+
+/// A node only touches a facet whose outward normal opposes the node's own
+/// surface normal by more than this cosine (surfaces in contact face each
+/// other): `n_node · n_facet < −FACING_COS`, i.e. within about 75° of
+/// head-on. This keeps a node of a flat surface lying under a corner of the
+/// other body from catching that body's side face.
+const FACING_COS: f64 = 0.25;
+
+/// What a boundary node remembers between steps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactState {
+    /// The facet it touched last step, or [`NONE`].
+    pub facet: u32,
+    /// Elastic tangential gap `g_tᵉ` (m), carried over to an adjacent facet.
+    pub elastic_gap: f64,
+}
+
+impl Default for ContactState {
+    fn default() -> Self {
+        Self { facet: NONE, elastic_gap: 0.0 }
+    }
+}
+
+/// The contact of one boundary node in this step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NodeContact {
+    /// The facet touched, or [`NONE`].
+    pub facet: u32,
+    /// Position of the node's projection on the facet, `ξ ∈ [0, 1]`.
+    pub xi: f64,
+    /// Normal gap `g_n` (m, negative = penetration).
+    pub gap: f64,
+    /// Force on the node (N/m); the facet's nodes get `−(1−ξ)` and `−ξ`
+    /// times it.
+    pub force: Vec2,
+    /// The normal dashpot's part of `force` (N/m), so that its work can be
+    /// measured where the scheme applies it.
+    pub damping_force: Vec2,
+    /// Normal force `f_n ≥ 0` (N/m).
+    pub normal_force: f64,
+    /// Tangential force (N/m).
+    pub tangential_force: f64,
+    /// Whether the contact slipped in this step.
+    pub slipping: bool,
+}
+
+/// Sums of one chunk of nodes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContactPartial {
+    /// Candidate pairs evaluated.
+    pub pairs: u64,
+    /// Active contacts.
+    pub contacts: u64,
+    /// Work dissipated by friction (J/m).
+    pub friction: f64,
+    /// Elastic energy in the penalty springs (J/m).
+    pub stored: f64,
+}
+
+/// Projection of point `s` on the facet `[a, b]`: `(ξ, g_n, n, t, L)`.
+#[inline(always)]
+pub fn project(s: Vec2, a: Vec2, b: Vec2) -> (f64, f64, Vec2, Vec2, f64) {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+    let t = [d[0] / len, d[1] / len];
+    let n = [t[1], -t[0]];
+    let r = [s[0] - a[0], s[1] - a[1]];
+    ((r[0] * t[0] + r[1] * t[1]) / len, r[0] * n[0] + r[1] * n[1], n, t, len)
+}
+
+/// Outward normal of boundary node `b` (unit): the sum of its own facets'
+/// normals `(dy, −dx)` at the current positions.
+#[inline]
+fn node_normal(surface: &Surface, x: &[Vec2], b: usize) -> Vec2 {
+    let mut n = [0.0; 2];
+    for &k in surface.node_facets.row(b) {
+        let m = facet_normal(surface, x, k);
+        n[0] += m[0];
+        n[1] += m[1];
+    }
+    let len = n[0].hypot(n[1]);
+    if len > 0.0 {
+        [n[0] / len, n[1] / len]
+    } else {
+        n
+    }
+}
+
+#[inline]
+fn facet_normal(surface: &Surface, x: &[Vec2], k: u32) -> Vec2 {
+    let f = surface.facets[k as usize].nodes;
+    let (a, c) = (x[f[0] as usize], x[f[1] as usize]);
+    let len = (c[0] - a[0]).hypot(c[1] - a[1]);
+    [(c[1] - a[1]) / len, -(c[0] - a[0]) / len]
+}
+
+/// Tributary length (m) of boundary node `b` on a contact whose facet has
+/// normal `n`: half of each of the node's own facets that face it (normals
+/// opposed within the facing angle). A corner node touching a flat face
+/// counts only its side on that face; a node inside an interface both
+/// halves.
+#[inline]
+fn tributary(surface: &Surface, x: &[Vec2], b: usize, n: Vec2) -> f64 {
+    surface
+        .node_facets
+        .row(b)
+        .iter()
+        .filter(|&&k| {
+            let m = facet_normal(surface, x, k);
+            m[0] * n[0] + m[1] * n[1] <= -FACING_COS
+        })
+        .map(|&k| 0.5 * surface.facets[k as usize].length)
+        .sum()
+}
+
+/// Inputs of the narrow phase.
+pub struct NarrowInputs<'a> {
+    /// Node positions `x^{n+1}` (m).
+    pub x: &'a [Vec2],
+    /// Node velocities `v^{n+½}` (m/s).
+    pub v: &'a [Vec2],
+    /// Node masses (kg/m).
+    pub mass: &'a [f64],
+    /// The surfaces.
+    pub surface: &'a Surface,
+    /// Candidate facets per boundary node.
+    pub candidates: &'a Csr,
+    /// Interface laws by index.
+    pub laws: &'a [InterfaceLaw],
+    /// The step (s), for the tangential slip increment.
+    pub dt: f64,
+}
+
+/// Evaluates the contact of every boundary node (parallel over fixed chunks):
+/// picks, among its candidate facets, the one it penetrates least (ties to
+/// the smaller facet id), then applies the penalty, dashpot and friction
+/// laws. Updates `states`, fills `out` and one partial per chunk.
+pub fn evaluate(
+    inp: &NarrowInputs<'_>,
+    states: &mut [ContactState],
+    out: &mut [NodeContact],
+    partials: &mut [ContactPartial],
+) {
+    states.par_chunks_mut(CHUNK).zip(out.par_chunks_mut(CHUNK)).zip(partials.par_iter_mut()).enumerate().for_each(
+        |(c, ((st, oc), part))| {
+            let mut acc = ContactPartial::default();
+            for j in 0..st.len() {
+                let b = c * CHUNK + j;
+                oc[j] = evaluate_node(inp, b, &mut st[j], &mut acc);
+            }
+            *part = acc;
+        },
+    );
+}
+
+#[inline]
+fn evaluate_node(inp: &NarrowInputs<'_>, b: usize, state: &mut ContactState, acc: &mut ContactPartial) -> NodeContact {
+    let node = inp.surface.nodes[b] as usize;
+    let s = inp.x[node];
+    // Candidates rank by how the contact continues: 0 the facet touched last
+    // step, 1 a facet next to it (sliding on along the surface), 2 a new
+    // contact; within a rank the least penetration wins (ties: smaller id).
+    // Keeping the same facet stops a node near a corner of the other body
+    // from flipping between two normals. A new contact must have been
+    // entered through the facet's line within this step (its penetration no
+    // deeper than its normal approach): a node that slides onto the end of a
+    // facet from the side would otherwise start with a finite penetration,
+    // and the penalty energy ½α g² would appear without work (an energy pump
+    // at every corner).
+    let mut best: Option<(u8, u32, f64, f64)> = None;
+    let mut own_normal: Option<Vec2> = None;
+    for &f in inp.candidates.row(b) {
+        acc.pairs += 1;
+        let facet = &inp.surface.facets[f as usize];
+        let (ia, ib) = (facet.nodes[0] as usize, facet.nodes[1] as usize);
+        let (xi, gap, n, _, len) = project(s, inp.x[ia], inp.x[ib]);
+        if !(-XI_SLACK..=1.0 + XI_SLACK).contains(&xi) || gap >= 0.0 || gap < -facet.depth {
+            continue;
+        }
+        let own = *own_normal.get_or_insert_with(|| node_normal(inp.surface, inp.x, b));
+        if own[0] * n[0] + own[1] * n[1] > -FACING_COS {
+            continue;
+        }
+        let rank = if f == state.facet {
+            0
+        } else if state.facet != NONE && inp.surface.adjacent(state.facet, f) && {
+            // continuing along the surface, not turning a corner of it
+            let prev = &inp.surface.facets[state.facet as usize];
+            let (pa, pb) = (inp.x[prev.nodes[0] as usize], inp.x[prev.nodes[1] as usize]);
+            let d = [pb[0] - pa[0], pb[1] - pa[1]];
+            (d[1] * n[0] - d[0] * n[1]) >= SMOOTH_COS * d[0].hypot(d[1])
+        } {
+            1
+        } else {
+            let w = xi.clamp(0.0, 1.0);
+            let v = inp.v;
+            let approach = ((v[node][0] - (1.0 - w) * v[ia][0] - w * v[ib][0]) * n[0]
+                + (v[node][1] - (1.0 - w) * v[ia][1] - w * v[ib][1]) * n[1])
+                .abs()
+                * inp.dt;
+            if gap < -(2.0 * approach + 1e-12 * len) {
+                continue;
+            }
+            2
+        };
+        if best.is_none_or(|(r, _, _, g)| rank < r || (rank == r && gap > g)) {
+            best = Some((rank, f, xi, gap));
+        }
+    }
+    let continues = best.is_some_and(|(rank, ..)| rank == 1);
+    let best = best.map(|(_, f, xi, gap)| (f, xi, gap));
+    let Some((f, xi, gap)) = best else {
+        *state = ContactState::default();
+        return NodeContact { facet: NONE, ..Default::default() };
+    };
+    let xi = xi.clamp(0.0, 1.0);
+    let facet = &inp.surface.facets[f as usize];
+    let law = &inp.laws[facet.law as usize];
+    let (ia, ib) = (facet.nodes[0] as usize, facet.nodes[1] as usize);
+    let (_, _, n, t, _) = project(s, inp.x[ia], inp.x[ib]);
+    let v = inp.v;
+    let vrel = [v[node][0] - (1.0 - xi) * v[ia][0] - xi * v[ib][0], v[node][1] - (1.0 - xi) * v[ia][1] - xi * v[ib][1]];
+    let gap_rate = vrel[0] * n[0] + vrel[1] * n[1];
+    // the node's springs: stiffness per unit area × its share of the contact
+    let trib = tributary(inp.surface, inp.x, b, n);
+    let (alpha_n, alpha_t) = (law.normal_stiffness * trib, law.shear_stiffness * trib);
+    // The dashpot is sized for the pair's relative motion: critical damping
+    // of a spring between two masses uses their reduced mass. Sizing it with
+    // the node's mass alone over-damps (explicitly: destabilises) a light
+    // facet node, e.g. a block corner under a heavier node.
+    let (ms, mf) = (inp.mass[node], (1.0 - xi) * inp.mass[ia] + xi * inp.mass[ib]);
+    let m = if mf > 0.0 { ms * mf / (ms + mf) } else { ms };
+    let dashpot = law.damping_ratio * 2.0 * (alpha_n * m).sqrt();
+    let spring = -alpha_n * gap;
+    let normal_force = (spring - dashpot * gap_rate).max(0.0);
+    // the dashpot's actual share of the normal force, after the no-pull clamp
+    let fd = normal_force - spring;
+    // carry the elastic tangential gap over to a neighbouring facet
+    let elastic_gap = if state.facet == f {
+        state.elastic_gap
+    } else if state.facet != NONE && inp.surface.adjacent(state.facet, f) && continues {
+        let prev = &inp.surface.facets[state.facet as usize];
+        let (pa, pb) = (inp.x[prev.nodes[0] as usize], inp.x[prev.nodes[1] as usize]);
+        let dir = (pb[0] - pa[0]) * t[0] + (pb[1] - pa[1]) * t[1];
+        if dir >= 0.0 {
+            state.elastic_gap
+        } else {
+            -state.elastic_gap
+        }
+    } else {
+        0.0
+    };
+    let slip = inp.dt * (vrel[0] * t[0] + vrel[1] * t[1]);
+    // Contact is two-pass: the nodes of each side press on the facets of the
+    // other, so along an interface both sides' nodes carry cohesion. Each
+    // carries half, so that the interface as a whole resists c_j × length
+    // (the normal forces need no such care: the passes share the load).
+    let cohesion = 0.5 * law.cohesion * trib;
+    let (ft, new_gap, work) = friction_update(law, alpha_t, elastic_gap, slip, normal_force, cohesion);
+    *state = ContactState { facet: f, elastic_gap: new_gap };
+    acc.contacts += 1;
+    acc.friction += work;
+    acc.stored += 0.5 * alpha_n * gap * gap + 0.5 * alpha_t * new_gap * new_gap;
+    NodeContact {
+        facet: f,
+        xi,
+        gap,
+        force: [normal_force * n[0] - ft * t[0], normal_force * n[1] - ft * t[1]],
+        damping_force: [fd * n[0], fd * n[1]],
+        normal_force,
+        tangential_force: ft,
+        slipping: work > 0.0,
+    }
+}
+
+/// Adds every contact force into `forces`, and the dashpot parts also into
+/// `damping` (one entry per boundary node, zeroed first), in boundary-node
+/// order: deterministic.
+pub fn assemble(surface: &Surface, contacts: &[NodeContact], forces: &mut [Vec2], damping: &mut [Vec2]) {
+    forces.iter_mut().for_each(|f| *f = [0.0; 2]);
+    damping.iter_mut().for_each(|f| *f = [0.0; 2]);
+    for (b, c) in contacts.iter().enumerate() {
+        if c.facet == NONE {
+            continue;
+        }
+        let facet = &surface.facets[c.facet as usize];
+        let fa = surface.index_of[facet.nodes[0] as usize] as usize;
+        let fb = surface.index_of[facet.nodes[1] as usize] as usize;
+        for (out, f) in [(&mut *forces, c.force), (&mut *damping, c.damping_force)] {
+            for d in 0..2 {
+                out[b][d] += f[d];
+                out[fa][d] -= (1.0 - c.xi) * f[d];
+                out[fb][d] -= c.xi * f[d];
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn projection_of_a_point_below_a_facet() {
+        // facet from (0,0) to (2,0): body above? No: body on the left of the
+        // direction +x, i.e. above; outward normal is −y.
+        let (xi, gap, n, t, len) = project([0.5, 0.1], [0.0, 0.0], [2.0, 0.0]);
+        assert_eq!((xi, len), (0.25, 2.0));
+        assert_eq!(n, [0.0, -1.0]);
+        assert_eq!(t, [1.0, 0.0]);
+        assert!((gap + 0.1).abs() < 1e-15); // 0.1 inside the body
+    }
+}

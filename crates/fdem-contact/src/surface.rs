@@ -1,0 +1,102 @@
+//! The free surfaces of a mesh: boundary facets with their interface law,
+//! the boundary nodes, and per node its own facets.
+
+use fdem_mesh::Csr;
+
+use crate::{Vec2, NONE};
+
+/// One boundary facet, oriented with the body on its left (outward normal
+/// `(dy, −dx)/L`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceFacet {
+    /// Start and end node (mesh ids).
+    pub nodes: [u32; 2],
+    /// Index of the interface law.
+    pub law: u16,
+    /// Reference length (m), for tributary lengths.
+    pub length: f64,
+    /// Deepest penetration accepted behind this facet (m): half the height
+    /// of its element over it. A node deeper than this is on the far side.
+    pub depth: f64,
+}
+
+/// The free surfaces of the current mesh.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Surface {
+    /// All boundary facets.
+    pub facets: Vec<SurfaceFacet>,
+    /// Mesh ids of the nodes on any facet, ascending.
+    pub nodes: Vec<u32>,
+    /// For every mesh node its index in `nodes`, or [`NONE`].
+    pub index_of: Vec<u32>,
+    /// For every boundary node (index in `nodes`) the facets it belongs to.
+    pub node_facets: Csr,
+}
+
+impl Surface {
+    /// Builds the surface of a mesh with `n_nodes` nodes from its boundary
+    /// facets `(nodes, law)`, the reference positions and, per facet, the
+    /// reference position of its element's third node.
+    pub fn new(n_nodes: usize, facets: &[([u32; 2], u16)], x_ref: &[Vec2], apex: &[Vec2]) -> Self {
+        let mut surface_facets = Vec::with_capacity(facets.len());
+        for (k, &([a, b], law)) in facets.iter().enumerate() {
+            let (pa, pb) = (x_ref[a as usize], x_ref[b as usize]);
+            let d = [pb[0] - pa[0], pb[1] - pa[1]];
+            let length = d[0].hypot(d[1]);
+            let c = apex[k];
+            let height = ((c[0] - pa[0]) * d[1] - (c[1] - pa[1]) * d[0]).abs() / length;
+            surface_facets.push(SurfaceFacet { nodes: [a, b], law, length, depth: 0.5 * height });
+        }
+        let mut on = vec![false; n_nodes];
+        for f in &surface_facets {
+            on[f.nodes[0] as usize] = true;
+            on[f.nodes[1] as usize] = true;
+        }
+        let mut index_of = vec![NONE; n_nodes];
+        let mut nodes = Vec::new();
+        for (i, &o) in on.iter().enumerate() {
+            if o {
+                index_of[i] = nodes.len() as u32;
+                nodes.push(i as u32);
+            }
+        }
+        let node_facets = Csr::from_pairs(
+            nodes.len(),
+            surface_facets
+                .iter()
+                .enumerate()
+                .flat_map(|(k, f)| f.nodes.map(|n| (index_of[n as usize] as usize, k as u32))),
+        );
+        Self { facets: surface_facets, nodes, index_of, node_facets }
+    }
+
+    /// Largest tributary length (m) boundary node `b` can have: half of each
+    /// of its facets (for the stable step).
+    pub fn tributary_max(&self, b: usize) -> f64 {
+        self.node_facets.row(b).iter().map(|&k| 0.5 * self.facets[k as usize].length).sum()
+    }
+
+    /// Whether two facets share a node.
+    pub fn adjacent(&self, f: u32, g: u32) -> bool {
+        let (a, b) = (self.facets[f as usize].nodes, self.facets[g as usize].nodes);
+        a[0] == b[0] || a[0] == b[1] || a[1] == b[0] || a[1] == b[1]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn square_surface() {
+        // unit square, nodes 0..4 counter-clockwise, bottom facet a joint (law 1)
+        let x = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        let facets = [([0, 1], 1), ([1, 2], 0), ([2, 3], 0), ([3, 0], 0)];
+        let apex = [[1.0, 1.0], [0.0, 0.0], [0.0, 0.0], [1.0, 1.0]];
+        let s = Surface::new(4, &facets, &x, &apex);
+        assert_eq!(s.nodes, vec![0, 1, 2, 3]);
+        assert_eq!(s.tributary_max(0), 1.0);
+        assert!(s.adjacent(0, 1) && !s.adjacent(0, 2));
+        assert!((s.facets[0].depth - 0.5).abs() < 1e-15);
+    }
+}

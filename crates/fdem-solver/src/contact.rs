@@ -1,0 +1,157 @@
+//! Contact in the time loop: the glue between the solver's state and the
+//! `fdem-contact` crate (DESIGN §4.5).
+
+use std::collections::BTreeMap;
+
+use fdem_contact::narrow::{self, ContactPartial, NarrowInputs};
+use fdem_contact::{BroadPhase, ContactState, InterfaceLaw, NodeContact, Surface};
+use fdem_element::Vec2;
+
+use crate::error::SetupError;
+use crate::model::ContactSpec;
+use crate::NONE;
+
+/// Contact state and settings owned by the simulation.
+pub(crate) struct ContactModel {
+    pub laws: Vec<InterfaceLaw>,
+    /// Laws other than 0 by facet (sorted node pair).
+    pub facet_laws: BTreeMap<(u32, u32), u16>,
+    /// Law of crack faces.
+    pub crack_law: u16,
+    pub broad: BroadPhase,
+    /// Per boundary node: friction memory.
+    pub states: Vec<ContactState>,
+    /// Per boundary node: this step's contact.
+    pub out: Vec<NodeContact>,
+    pub partials: Vec<ContactPartial>,
+    /// Candidate pairs evaluated so far.
+    pub pairs_evaluated: u64,
+    /// Largest stiffness over all laws (Pa/m), for the stable step.
+    pub max_stiffness: f64,
+    /// Largest damping ratio over all laws.
+    pub max_damping: f64,
+    /// Margin given by the user, if any.
+    margin: Option<f64>,
+}
+
+impl ContactModel {
+    /// Checks and builds the contact model.
+    pub fn new(spec: &ContactSpec, n_nodes: usize) -> Result<Self, SetupError> {
+        if spec.laws.is_empty() {
+            return Err(SetupError::Invalid("contact needs at least one interface law".into()));
+        }
+        let mut laws = Vec::with_capacity(spec.laws.len());
+        for (k, l) in spec.laws.iter().enumerate() {
+            laws.push(
+                InterfaceLaw::new(l.normal_stiffness, l.shear_stiffness, l.friction, l.cohesion, l.damping_ratio)
+                    .map_err(|e| SetupError::Invalid(format!("interface law {k}: {e}")))?,
+            );
+        }
+        let mut facet_laws = BTreeMap::new();
+        for &([a, b], law) in &spec.facet_laws {
+            if a as usize >= n_nodes || b as usize >= n_nodes {
+                return Err(SetupError::Invalid(format!("interface facet ({a}, {b}) refers to a missing node")));
+            }
+            if law as usize >= laws.len() {
+                return Err(SetupError::Invalid(format!(
+                    "interface facet ({a}, {b}) uses law {law}, but only {} are defined",
+                    laws.len()
+                )));
+            }
+            facet_laws.insert((a.min(b), a.max(b)), law);
+        }
+        if spec.crack_law as usize >= laws.len() {
+            return Err(SetupError::Invalid(format!("crack law {} is not defined", spec.crack_law)));
+        }
+        if let Some(m) = spec.margin {
+            if !(m > 0.0 && m.is_finite()) {
+                return Err(SetupError::Invalid(format!("contact margin = {m} must be positive")));
+            }
+        }
+        let max_stiffness = laws.iter().map(|l| l.normal_stiffness.max(l.shear_stiffness)).fold(0.0, f64::max);
+        let max_damping = laws.iter().map(|l| l.damping_ratio).fold(0.0, f64::max);
+        Ok(Self {
+            laws,
+            facet_laws,
+            crack_law: spec.crack_law,
+            broad: BroadPhase::new(spec.margin.unwrap_or(1.0)),
+            states: Vec::new(),
+            out: Vec::new(),
+            partials: Vec::new(),
+            pairs_evaluated: 0,
+            max_stiffness,
+            max_damping,
+            margin: spec.margin,
+        })
+    }
+
+    /// The law of facet `(a, b)`.
+    pub fn law_of(&self, a: u32, b: u32) -> u16 {
+        self.facet_laws.get(&(a.min(b), a.max(b))).copied().unwrap_or(0)
+    }
+
+    /// Adapts to a new surface (after a topology change): friction memory
+    /// follows the nodes and facets that still exist.
+    pub fn adopt(&mut self, old: Option<&Surface>, new: &Surface) {
+        if self.margin.is_none() {
+            let mean = new.facets.iter().map(|f| f.length).sum::<f64>() / new.facets.len().max(1) as f64;
+            self.broad.margin = 0.2 * mean;
+        }
+        let mut states = vec![ContactState::default(); new.nodes.len()];
+        if let Some(old) = old {
+            let facet_id: BTreeMap<(u32, u32), u32> = new
+                .facets
+                .iter()
+                .enumerate()
+                .map(|(k, f)| ((f.nodes[0].min(f.nodes[1]), f.nodes[0].max(f.nodes[1])), k as u32))
+                .collect();
+            for (b, &node) in new.nodes.iter().enumerate() {
+                let ob = old.index_of.get(node as usize).copied().unwrap_or(NONE);
+                if ob == NONE || ob as usize >= self.states.len() {
+                    continue;
+                }
+                let s = self.states[ob as usize];
+                if s.facet == NONE {
+                    continue;
+                }
+                let [a, c] = old.facets[s.facet as usize].nodes;
+                if let Some(&f) = facet_id.get(&(a.min(c), a.max(c))) {
+                    states[b] = ContactState { facet: f, elastic_gap: s.elastic_gap };
+                }
+            }
+        }
+        self.states = states;
+        self.out = vec![NodeContact { facet: NONE, ..Default::default() }; new.nodes.len()];
+        self.partials = vec![ContactPartial::default(); new.nodes.len().div_ceil(fdem_contact::CHUNK)];
+        self.broad.invalidate();
+    }
+
+    /// One contact evaluation at positions `x`, velocities `v`: broad phase if
+    /// needed, narrow phase, assembly into `forces` and their dashpot parts
+    /// into `damping` (per boundary node).
+    /// Returns the summed partials.
+    pub fn evaluate(
+        &mut self,
+        surface: &Surface,
+        x: &[Vec2],
+        v: &[Vec2],
+        mass: &[f64],
+        dt: f64,
+        forces: &mut [Vec2],
+        damping: &mut [Vec2],
+    ) -> ContactPartial {
+        self.broad.update(surface, x);
+        let inp = NarrowInputs { x, v, mass, surface, candidates: &self.broad.candidates, laws: &self.laws, dt };
+        narrow::evaluate(&inp, &mut self.states, &mut self.out, &mut self.partials);
+        narrow::assemble(surface, &self.out, forces, damping);
+        let mut sum = ContactPartial::default();
+        for p in &self.partials {
+            sum.pairs += p.pairs;
+            sum.contacts += p.contacts;
+            sum.friction += p.friction;
+            sum.stored += p.stored;
+        }
+        self.pairs_evaluated += sum.pairs;
+        sum
+    }
+}

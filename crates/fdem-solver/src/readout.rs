@@ -1,0 +1,310 @@
+//! Reading results out of a [`Simulation`]: copies, never views of arrays
+//! that a topology change may reallocate.
+
+use fdem_element::kinematics::{deformation_gradient, polar_rotation, signed_area};
+use fdem_element::tensor::rotate;
+use fdem_element::Vec2;
+use fdem_material::PlasticState;
+
+use crate::energy::Energies;
+use crate::passes::NO_BC;
+use crate::simulation::{ContactStats, Simulation};
+use crate::{CHUNK, NONE};
+
+impl Simulation {
+    /// Current simulated time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.step
+    }
+
+    /// The step the next advance uses (s).
+    pub fn time_step(&self) -> f64 {
+        self.dt
+    }
+
+    /// Critical step of the mesh at its last evaluation, before the safety
+    /// factor (s): `min_e 2/ω_e`.
+    pub fn critical_time_step(&self) -> f64 {
+        self.dt_critical
+    }
+
+    /// Number of nodes.
+    pub fn n_nodes(&self) -> usize {
+        self.nodes.x.len()
+    }
+
+    /// Number of elements.
+    pub fn n_elements(&self) -> usize {
+        self.elems.conn.len()
+    }
+
+    /// Number of worker threads.
+    pub fn threads(&self) -> usize {
+        self.pool.current_num_threads()
+    }
+
+    /// Current node coordinates (m).
+    pub fn positions(&self) -> &[Vec2] {
+        &self.nodes.x
+    }
+
+    /// Reference node coordinates (m).
+    pub fn reference_positions(&self) -> &[Vec2] {
+        &self.nodes.x0
+    }
+
+    /// Element connectivity.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.elems.conn
+    }
+
+    /// Lumped nodal masses (kg per unit thickness).
+    pub fn masses(&self) -> &[f64] {
+        &self.nodes.mass
+    }
+
+    /// Whether each element is active.
+    pub fn active(&self) -> &[bool] {
+        &self.elems.active
+    }
+
+    /// Velocities at the current whole step (m/s):
+    /// `vⁿ = (v^{n−½} + Δt^{n−½}/2 · f/m) / (1 + αΔt^{n−½}/2)`, which equals
+    /// `(v^{n−½} + v^{n+½}) / 2` of the scheme, with constrained components
+    /// at their prescribed values.
+    pub fn velocities(&self) -> Vec<Vec2> {
+        let h = 0.5 * self.dt_prev;
+        let denom = 1.0 + self.settings.mass_damping * h;
+        let mut amp = self.amplitude_values.clone();
+        for (val, a) in amp.iter_mut().zip(&self.amplitudes) {
+            *val = a.at(self.time);
+        }
+        (0..self.n_nodes())
+            .map(|i| {
+                let m = self.nodes.mass[i];
+                let mut v = self.nodes.v[i];
+                if m > 0.0 && h > 0.0 {
+                    let f = self.net_force(i);
+                    v = [(v[0] + h * f[0] / m) / denom, (v[1] + h * f[1] / m) / denom];
+                }
+                let b = self.nodes.bc[i];
+                if b != NO_BC {
+                    let c = &self.constraints[b as usize];
+                    let a = c.amplitude.map_or(1.0, |k| amp[k as usize]);
+                    for d in 0..2 {
+                        if c.fixed[d] {
+                            v[d] = c.value[d] * a;
+                        }
+                    }
+                }
+                v
+            })
+            .collect()
+    }
+
+    /// Net force on node `i` at the current configuration (N).
+    fn net_force(&self, i: usize) -> Vec2 {
+        let m = self.nodes.mass[i];
+        let (p, c) = self.surface_force(i);
+        let mut f = [m * self.gravity[0] + p[0] + c[0], m * self.gravity[1] + p[1] + c[1]];
+        for &item in self.node_elems.row(i) {
+            let fe = self.elems.force[item as usize];
+            f[0] -= fe[0];
+            f[1] -= fe[1];
+        }
+        f
+    }
+
+    /// Pressure and contact force on node `i` (N).
+    fn surface_force(&self, i: usize) -> (Vec2, Vec2) {
+        let b = self.surface.index_of[i];
+        if b == NONE {
+            return ([0.0; 2], [0.0; 2]);
+        }
+        (self.pressure_force[b as usize], self.contact_force.get(b as usize).copied().unwrap_or([0.0; 2]))
+    }
+
+    /// Rotation `R` (cos, sin) of element `e` at the current configuration.
+    fn rotation(&self, e: usize) -> (f64, f64) {
+        let t = self.elems.conn[e];
+        let x = [self.nodes.x[t[0] as usize], self.nodes.x[t[1] as usize], self.nodes.x[t[2] as usize]];
+        polar_rotation(deformation_gradient(&self.elems.reference[e], &x))
+    }
+
+    /// Cauchy stress `σ = R σ̂ Rᵀ` of every element, `[xx, yy, zz, xy]` (Pa).
+    pub fn stress(&self) -> Vec<[f64; 4]> {
+        (0..self.n_elements())
+            .map(|e| {
+                let (c, s) = self.rotation(e);
+                rotate(self.elems.stress[e], c, s)
+            })
+            .collect()
+    }
+
+    /// Plastic state of every element (co-rotational frame; defaults for
+    /// elastic materials).
+    pub fn plastic_states(&self) -> &[PlasticState] {
+        &self.elems.state
+    }
+
+    /// Failure factor `F = κ H / f_t` of every element (eq. 2.21); 0 for
+    /// elastic materials.
+    pub fn failure_factors(&self) -> Vec<f64> {
+        (0..self.n_elements())
+            .map(|e| match &self.materials[self.elems.material[e] as usize].plastic {
+                Some(law) => law.failure_factor(&self.elems.state[e]),
+                None => 0.0,
+            })
+            .collect()
+    }
+
+    /// Direction of σ1 at the last tensile plastic step of every element in
+    /// the current frame (rad from x): the rotating crack's normal.
+    pub fn crack_directions(&self) -> Vec<f64> {
+        (0..self.n_elements())
+            .map(|e| {
+                let (c, s) = self.rotation(e);
+                let a = self.elems.state[e].direction + s.atan2(c);
+                // a direction, not an orientation: keep it in (−π/2, π/2]
+                let half = std::f64::consts::FRAC_PI_2;
+                if a > half {
+                    a - std::f64::consts::PI
+                } else if a <= -half {
+                    a + std::f64::consts::PI
+                } else {
+                    a
+                }
+            })
+            .collect()
+    }
+
+    /// Plastic strain of every element rotated to the current frame,
+    /// `[xx, yy, zz, xy]` (tensor shear).
+    pub fn plastic_strain(&self) -> Vec<[f64; 4]> {
+        (0..self.n_elements())
+            .map(|e| {
+                let (c, s) = self.rotation(e);
+                rotate(self.elems.state[e].plastic_strain, c, s)
+            })
+            .collect()
+    }
+
+    /// Counters of the contact search.
+    pub fn contact_stats(&self) -> ContactStats {
+        self.contact_stats
+    }
+
+    /// The free-surface facets `(start, end, law)`, oriented with the body
+    /// on their left.
+    pub fn surface_facets(&self) -> Vec<([u32; 2], u16)> {
+        self.surface.facets.iter().map(|f| (f.nodes, f.law)).collect()
+    }
+
+    /// The active contacts: for each, the node, the facet's two nodes, the
+    /// projection `ξ`, the gap (m), the normal and tangential forces (N/m)
+    /// and whether it slipped in the last step.
+    pub fn contacts(&self) -> Vec<(u32, [u32; 2], f64, f64, f64, f64, bool)> {
+        let Some(c) = &self.contact else { return Vec::new() };
+        c.out
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.facet != NONE)
+            .map(|(b, o)| {
+                let f = self.surface.facets[o.facet as usize].nodes;
+                (self.surface.nodes[b], f, o.xi, o.gap, o.normal_force, o.tangential_force, o.slipping)
+            })
+            .collect()
+    }
+
+    /// Current element areas (m²).
+    pub fn areas(&self) -> Vec<f64> {
+        self.elems
+            .conn
+            .iter()
+            .map(|t| {
+                signed_area(&[self.nodes.x[t[0] as usize], self.nodes.x[t[1] as usize], self.nodes.x[t[2] as usize]])
+            })
+            .collect()
+    }
+
+    /// Kinetic energy at the current whole step (J per unit thickness).
+    pub fn kinetic_energy(&self) -> f64 {
+        let v = self.velocities();
+        let per_chunk: Vec<f64> = v
+            .chunks(CHUNK)
+            .zip(self.nodes.mass.chunks(CHUNK))
+            .map(|(vc, mc)| vc.iter().zip(mc).map(|(v, m)| 0.5 * m * (v[0] * v[0] + v[1] * v[1])).sum())
+            .collect();
+        per_chunk.iter().sum()
+    }
+
+    /// Elastic strain energy `Σ A ½ σ̂ : C⁻¹ : σ̂` (J per unit thickness).
+    pub fn elastic_energy(&self) -> f64 {
+        let areas = self.areas();
+        (0..self.n_elements())
+            .filter(|&e| self.elems.active[e])
+            .map(|e| {
+                let mat = &self.materials[self.elems.material[e] as usize];
+                areas[e] * mat.elastic.energy_density(self.elems.stress[e])
+            })
+            .sum()
+    }
+
+    /// The energy account at the current step.
+    ///
+    /// The accumulated work pairs the force of step `n` with the centred
+    /// displacement `(Δx^{n−½} + Δx^{n+½}) / 2`; at a whole step the second
+    /// half of the last displacement is still pending and is added here, so
+    /// that the account matches the whole-step kinetic energy.
+    pub fn energies(&self) -> Energies {
+        let v = self.velocities();
+        let h = 0.5 * self.dt_prev;
+        let (mut external, mut support, mut damping, mut contact, mut contact_damping) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for i in 0..self.n_nodes() {
+            let m = self.nodes.mass[i];
+            if m <= 0.0 || h == 0.0 {
+                continue;
+            }
+            let half = self.nodes.v[i];
+            let dx = [h * half[0], h * half[1]];
+            let g = self.gravity;
+            let (p, c) = self.surface_force(i);
+            external += (m * g[0] + p[0]) * dx[0] + (m * g[1] + p[1]) * dx[1];
+            contact += c[0] * dx[0] + c[1] * dx[1];
+            let bn = self.surface.index_of[i];
+            if bn != NONE {
+                if let Some(fd) = self.contact_damping_force.get(bn as usize) {
+                    contact_damping -= fd[0] * dx[0] + fd[1] * dx[1];
+                }
+            }
+            let alpha = self.settings.mass_damping;
+            damping += alpha * m * (v[i][0] * dx[0] + v[i][1] * dx[1]);
+            let b = self.nodes.bc[i];
+            if b != NO_BC {
+                let f = self.net_force(i);
+                let c = &self.constraints[b as usize];
+                for d in 0..2 {
+                    if c.fixed[d] {
+                        let reaction = m * (v[i][d] - half[d]) / h + alpha * m * v[i][d] - f[d];
+                        support += reaction * dx[d];
+                    }
+                }
+            }
+        }
+        Energies {
+            kinetic: self.kinetic_energy(),
+            elastic: self.elastic_energy(),
+            external_work: self.energies.external_work + external,
+            support_work: self.energies.support_work + support,
+            mass_damping: self.energies.mass_damping + damping,
+            contact_work: self.energies.contact_work + contact,
+            contact_damping: self.energies.contact_damping + contact_damping,
+            ..self.energies
+        }
+    }
+}
