@@ -84,6 +84,7 @@ def test_output_series_opens_and_has_the_documented_fields(tmp_path):
         arr = last.cell_data[key][0]
         assert len(arr) == mesh.n_elements and (cols is None or arr.shape[1] == cols)
     assert np.allclose(last.cell_data["stress"][0], sim.stress())
+    assert len(last.cells) == 1  # no joints or cracks: triangles only
     energy = np.genfromtxt(tmp_path / "col_energy.csv", delimiter=",", names=True)
     assert len(energy) == 5 and "kinetic" in energy.dtype.names
     # a second series with the same name is refused unless overwrite=True
@@ -158,3 +159,14 @@ def test_stub_matches_the_native_module():
     pytest.importorskip("mypy")
     out = subprocess.run([sys.executable, "-m", "mypy.stubtest", "fdem._core"], capture_output=True, text=True)
     assert out.returncode == 0, out.stdout + out.stderr
+
+
+def test_joint_faces_are_written_as_lines(tmp_path):
+    mesh = fdem.jointed_rectangle(4.0, 2.0, 0.5, [fdem.JointSet(90, 10.0, 0.0, 1.0, name="v")])
+    model = fdem.Model(mesh, material=ROCK).fix("bottom").contact(interfaces={"v": fdem.Interface()})
+    sim = fdem.Simulation(model)
+    sim.write_vtu(tmp_path / "j.vtu")
+    m = meshio.read(tmp_path / "j.vtu")
+    lines = m.cells[1].data
+    assert m.cells[1].type == "line" and len(lines) == len(mesh.facet_sets["v"])
+    assert np.all(m.cell_data["interface"][1] == 1) and np.all(m.cell_data["interface"][0] == -1)

@@ -9,10 +9,9 @@ from __future__ import annotations
 
 import math
 
+import fdem
 import numpy as np
 import pytest
-
-import fdem
 
 ROCK = fdem.Elastic(E=10e9, nu=0.25, rho=2500.0)
 G = 9.81

@@ -49,3 +49,25 @@ pub fn block(nx: usize, ny: usize) -> ModelSpec {
         ..Default::default()
     }
 }
+
+/// A grid of `nx × ny` separate unit squares (each two triangles, its own
+/// four nodes), touching their neighbours node on node: every square side
+/// is a contact interface. Returns node positions and the boundary facets
+/// (counter-clockwise per square), `4 nx ny` of them.
+pub fn block_grid(nx: usize, ny: usize) -> (Vec<[f64; 2]>, Vec<[u32; 2]>, Vec<[f64; 2]>) {
+    let mut x = Vec::with_capacity(4 * nx * ny);
+    let mut facets = Vec::with_capacity(4 * nx * ny);
+    let mut apex = Vec::with_capacity(4 * nx * ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            let base = x.len() as u32;
+            let (x0, y0) = (i as f64, j as f64);
+            x.extend_from_slice(&[[x0, y0], [x0 + 1.0, y0], [x0 + 1.0, y0 + 1.0], [x0, y0 + 1.0]]);
+            for k in 0..4u32 {
+                facets.push([base + k, base + (k + 1) % 4]);
+                apex.push([x0 + 0.5, y0 + 0.5]);
+            }
+        }
+    }
+    (x, facets, apex)
+}

@@ -17,8 +17,8 @@ Typical use::
 
 from . import errors
 from ._core import __version__
-from .errors import InvertedElementError, NonFiniteError, SimulationError
 from .contact import Interface
+from .errors import InvertedElementError, NonFiniteError, SimulationError
 from .joints import JointSet, jointed_rectangle
 from .laboratory import MaterialPointResult, material_point
 from .materials import Elastic, MohrCoulombRankine

@@ -247,24 +247,25 @@ class Model:
             of it.
         """
         default = default if default is not None else Interface()
+        # every named interface and the cracks get their own law index (even
+        # if equal to the default), so that their faces can be told apart in
+        # the output
         laws: list[Interface] = [default]
         named: dict[str, int] = {}
         for name, law in (interfaces or {}).items():
             if not isinstance(law, Interface):
                 raise ValueError(f"interfaces['{name}'] must be a fdem.Interface")
             self.mesh.facets(name)
-            if law not in laws:
-                laws.append(law)
-            named[name] = laws.index(law)
+            named[name] = len(laws)
+            laws.append(law)
         if cracks is not None and not isinstance(cracks, Interface):
             raise ValueError("cracks must be a fdem.Interface")
-        crack = cracks if cracks is not None else default
-        if crack not in laws:
-            laws.append(crack)
+        laws.append(cracks if cracks is not None else default)
+        crack_index = len(laws) - 1
         self._contact = {
             "laws": laws,
             "named": named,
-            "crack": laws.index(crack),
+            "crack": crack_index,
             "margin": None if margin is None else positive("margin", margin),
         }
         return self

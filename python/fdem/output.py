@@ -54,19 +54,38 @@ def cell_fields(sim: Simulation) -> dict[str, NDArray[Any]]:
 
 
 def write_vtu(sim: Simulation, path: str | os.PathLike[str]) -> None:
-    """Writes the current state as one VTU file (atomically)."""
+    """Writes the current state as one VTU file (atomically).
+
+    Cell blocks: the triangles with their fields, and (if any) the faces of
+    joints and cracks as lines (cell data ``interface``: the index of their
+    contact law; triangle fields are zero on lines and ``interface`` is -1 on
+    triangles), so ParaView can show or threshold them.
+    """
     import meshio
 
     path = os.fspath(path)
     x = sim.positions()
+    tri = sim.triangles()
+    facets, laws = sim.surface_facets()
+    lines = facets[laws > 0]
+    cells = cell_fields(sim)
+    blocks: list[tuple[str, NDArray[Any]]] = [("triangle", tri)]
+    cell_data: dict[str, list[NDArray[Any]]] = {k: [np.asarray(v)] for k, v in cells.items()}
+    cell_data["interface"] = [np.full(len(tri), -1, dtype=np.int32)]
+    if len(lines):
+        blocks.append(("line", lines))
+        for key, value in cells.items():
+            value = np.asarray(value)
+            cell_data[key].append(np.zeros((len(lines),) + value.shape[1:], dtype=value.dtype))
+        cell_data["interface"].append(laws[laws > 0].astype(np.int32))
     mesh = meshio.Mesh(
         _pad3(x),
-        [("triangle", sim.triangles())],
+        blocks,
         point_data={
             "displacement": _pad3(x - sim.reference_positions()),
             "velocity": _pad3(sim.velocities()),
         },
-        cell_data={k: [v] for k, v in cell_fields(sim).items()},
+        cell_data=cell_data,
     )
     tmp = path + ".tmp"
     meshio.write(tmp, mesh, file_format="vtu")

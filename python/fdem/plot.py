@@ -51,6 +51,7 @@ def plot_field(
     cmap: str = "turbo",
     limits: tuple[float, float] | None = None,
     show_mesh: bool = False,
+    show_interfaces: bool = True,
     ax: Any = None,
 ) -> Any:
     """Draws a field on the deformed mesh and saves it as PNG if ``path`` is
@@ -63,6 +64,8 @@ def plot_field(
         ``velocity`` or any cell field written to the VTU files.
     limits : (float, float), optional
         Colour range in display units (MPa for stresses).
+    show_interfaces : bool
+        Draw the faces of joints and cracks (black lines).
     """
     import matplotlib
 
@@ -96,6 +99,13 @@ def plot_field(
         art = ax.tripcolor(t, facecolors=values * scale, **kw)
     if show_mesh:
         ax.triplot(t, color="k", lw=0.2, alpha=0.4)
+    if show_interfaces:
+        facets, laws = sim.surface_facets()
+        segs = x[facets[laws > 0]]
+        if len(segs):
+            from matplotlib.collections import LineCollection
+
+            ax.add_collection(LineCollection(segs, colors="k", linewidths=0.4, alpha=0.7))
     fig.colorbar(art, ax=ax, label=f"{label} ({unit})" if unit else label, shrink=0.85)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")

@@ -181,6 +181,12 @@ class Simulation:
         ``contacts`` (now)."""
         return dict(self._core.contact_stats())
 
+    def phase_times(self) -> dict[str, float]:
+        """Wall-clock seconds spent so far in each phase of the step
+        (``nodes``, ``elements``, ``broad_phase``, ``surface``, ``time_step``);
+        for profiling, results never depend on them."""
+        return dict(self._core.phase_times())
+
     def surface_facets(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """The free-surface facets (n, 2), body on their left, and the index of
         each one's interface law (0: free boundary)."""

@@ -74,7 +74,8 @@ impl BroadPhase {
         surface.nodes.par_iter().zip(self.built_at.par_iter()).with_min_len(CHUNK).any(|(&n, b)| {
             let p = x[n as usize];
             let (dx, dy) = (p[0] - b[0], p[1] - b[1]);
-            !(dx * dx + dy * dy <= limit)
+            let d2 = dx * dx + dy * dy;
+            d2.is_nan() || d2 > limit
         })
     }
 

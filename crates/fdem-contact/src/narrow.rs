@@ -100,7 +100,7 @@ fn node_normal(surface: &Surface, x: &[Vec2], b: usize) -> Vec2 {
         n[0] += m[0];
         n[1] += m[1];
     }
-    let len = n[0].hypot(n[1]);
+    let len = (n[0] * n[0] + n[1] * n[1]).sqrt();
     if len > 0.0 {
         [n[0] / len, n[1] / len]
     } else {
@@ -112,8 +112,9 @@ fn node_normal(surface: &Surface, x: &[Vec2], b: usize) -> Vec2 {
 fn facet_normal(surface: &Surface, x: &[Vec2], k: u32) -> Vec2 {
     let f = surface.facets[k as usize].nodes;
     let (a, c) = (x[f[0] as usize], x[f[1] as usize]);
-    let len = (c[0] - a[0]).hypot(c[1] - a[1]);
-    [(c[1] - a[1]) / len, -(c[0] - a[0]) / len]
+    let d = [c[0] - a[0], c[1] - a[1]];
+    let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+    [d[1] / len, -d[0] / len]
 }
 
 /// Tributary length (m) of boundary node `b` on a contact whose facet has
@@ -210,7 +211,7 @@ fn evaluate_node(inp: &NarrowInputs<'_>, b: usize, state: &mut ContactState, acc
             let prev = &inp.surface.facets[state.facet as usize];
             let (pa, pb) = (inp.x[prev.nodes[0] as usize], inp.x[prev.nodes[1] as usize]);
             let d = [pb[0] - pa[0], pb[1] - pa[1]];
-            (d[1] * n[0] - d[0] * n[1]) >= SMOOTH_COS * d[0].hypot(d[1])
+            (d[1] * n[0] - d[0] * n[1]) >= SMOOTH_COS * (d[0] * d[0] + d[1] * d[1]).sqrt()
         } {
             1
         } else {

@@ -491,20 +491,34 @@ impl PySimulation {
         Ok(d)
     }
 
+    /// Wall-clock seconds spent so far in each phase of the step: `nodes`,
+    /// `elements`, `broad_phase`, `surface` (narrow phase, assembly,
+    /// pressure), `time_step`.
+    fn phase_times<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let t = self.sim.phase_times();
+        let d = PyDict::new(py);
+        d.set_item("nodes", t.nodes)?;
+        d.set_item("elements", t.elements)?;
+        d.set_item("broad_phase", t.broad_phase)?;
+        d.set_item("surface", t.surface)?;
+        d.set_item("time_step", t.time_step)?;
+        Ok(d)
+    }
+
     /// The active contacts as a dict of arrays: `node`, `facet` (n, 2), `xi`,
     /// `gap` (m), `normal_force`, `tangential_force` (N/m), `slipping`.
     fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         guard(|| {
             let c = self.sim.contacts();
             let d = PyDict::new(py);
-            d.set_item("node", c.iter().map(|t| t.0 as i64).collect::<Vec<_>>().into_pyarray(py))?;
-            let facets: Vec<i64> = c.iter().flat_map(|t| [t.1[0] as i64, t.1[1] as i64]).collect();
+            d.set_item("node", c.iter().map(|t| t.node as i64).collect::<Vec<_>>().into_pyarray(py))?;
+            let facets: Vec<i64> = c.iter().flat_map(|t| [t.facet[0] as i64, t.facet[1] as i64]).collect();
             d.set_item("facet", Array2::from_shape_vec((c.len(), 2), facets).expect("shape").into_pyarray(py))?;
-            d.set_item("xi", c.iter().map(|t| t.2).collect::<Vec<_>>().into_pyarray(py))?;
-            d.set_item("gap", c.iter().map(|t| t.3).collect::<Vec<_>>().into_pyarray(py))?;
-            d.set_item("normal_force", c.iter().map(|t| t.4).collect::<Vec<_>>().into_pyarray(py))?;
-            d.set_item("tangential_force", c.iter().map(|t| t.5).collect::<Vec<_>>().into_pyarray(py))?;
-            d.set_item("slipping", c.iter().map(|t| t.6).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("xi", c.iter().map(|t| t.xi).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("gap", c.iter().map(|t| t.gap).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("normal_force", c.iter().map(|t| t.normal_force).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("tangential_force", c.iter().map(|t| t.tangential_force).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("slipping", c.iter().map(|t| t.slipping).collect::<Vec<_>>().into_pyarray(py))?;
             Ok(d)
         })
     }

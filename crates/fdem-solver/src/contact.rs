@@ -126,9 +126,9 @@ impl ContactModel {
         self.broad.invalidate();
     }
 
-    /// One contact evaluation at positions `x`, velocities `v`: broad phase if
-    /// needed, narrow phase, assembly into `forces` and their dashpot parts
-    /// into `damping` (per boundary node).
+    /// One contact evaluation at positions `x`, velocities `v` (the broad
+    /// phase must be up to date): narrow phase, assembly into `forces` and
+    /// their dashpot parts into `damping` (per boundary node).
     /// Returns the summed partials.
     pub fn evaluate(
         &mut self,
@@ -140,7 +140,6 @@ impl ContactModel {
         forces: &mut [Vec2],
         damping: &mut [Vec2],
     ) -> ContactPartial {
-        self.broad.update(surface, x);
         let inp = NarrowInputs { x, v, mass, surface, candidates: &self.broad.candidates, laws: &self.laws, dt };
         narrow::evaluate(&inp, &mut self.states, &mut self.out, &mut self.partials);
         narrow::assemble(surface, &self.out, forces, damping);

@@ -41,7 +41,7 @@ pub mod mesh {
 }
 pub use loads::{Amplitude, Constraint, PressureLoad};
 pub use model::{ContactSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Settings};
-pub use simulation::{ContactStats, Simulation};
+pub use simulation::{ContactInfo, ContactStats, PhaseTimes, Simulation};
 
 /// Nodes or elements per parallel work item. Fixed, so that partial sums
 /// (and therefore results) do not depend on the thread count.

@@ -8,7 +8,7 @@ use fdem_material::PlasticState;
 
 use crate::energy::Energies;
 use crate::passes::NO_BC;
-use crate::simulation::{ContactStats, Simulation};
+use crate::simulation::{ContactInfo, ContactStats, PhaseTimes, Simulation};
 use crate::{CHUNK, NONE};
 
 impl Simulation {
@@ -194,6 +194,11 @@ impl Simulation {
             .collect()
     }
 
+    /// Wall-clock time spent in each phase so far.
+    pub fn phase_times(&self) -> PhaseTimes {
+        self.phase_times
+    }
+
     /// Counters of the contact search.
     pub fn contact_stats(&self) -> ContactStats {
         self.contact_stats
@@ -205,18 +210,21 @@ impl Simulation {
         self.surface.facets.iter().map(|f| (f.nodes, f.law)).collect()
     }
 
-    /// The active contacts: for each, the node, the facet's two nodes, the
-    /// projection `ξ`, the gap (m), the normal and tangential forces (N/m)
-    /// and whether it slipped in the last step.
-    pub fn contacts(&self) -> Vec<(u32, [u32; 2], f64, f64, f64, f64, bool)> {
+    /// The active contacts of the last step.
+    pub fn contacts(&self) -> Vec<ContactInfo> {
         let Some(c) = &self.contact else { return Vec::new() };
         c.out
             .iter()
             .enumerate()
             .filter(|(_, o)| o.facet != NONE)
-            .map(|(b, o)| {
-                let f = self.surface.facets[o.facet as usize].nodes;
-                (self.surface.nodes[b], f, o.xi, o.gap, o.normal_force, o.tangential_force, o.slipping)
+            .map(|(b, o)| ContactInfo {
+                node: self.surface.nodes[b],
+                facet: self.surface.facets[o.facet as usize].nodes,
+                xi: o.xi,
+                gap: o.gap,
+                normal_force: o.normal_force,
+                tangential_force: o.tangential_force,
+                slipping: o.slipping,
             })
             .collect()
     }

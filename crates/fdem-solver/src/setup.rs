@@ -15,7 +15,7 @@ use crate::error::SetupError;
 use crate::loads::Constraint;
 use crate::model::{LawSpec, ModelSpec};
 use crate::passes::{self, Material, NO_BC};
-use crate::simulation::{check_settings, invalid, ContactStats, Elements, Nodes, Simulation};
+use crate::simulation::{check_settings, invalid, ContactStats, Elements, Nodes, PhaseTimes, Simulation};
 use crate::topology::{build_surface, resolve_pressures};
 use crate::CHUNK;
 
@@ -229,6 +229,7 @@ impl Simulation {
             surface,
             contact,
             contact_stats: ContactStats::default(),
+            phase_times: PhaseTimes::default(),
             omega: vec![0.0; m],
             gravity: spec.gravity,
             settings: spec.settings,

@@ -2,6 +2,7 @@
 //! `setup.rs`, read-out of results in `readout.rs`.
 
 use std::sync::Arc;
+use std::time::Instant;
 
 use fdem_contact::Surface;
 use fdem_element::{ReferenceShape, Vec2};
@@ -58,6 +59,41 @@ pub struct ContactStats {
     pub contacts: u64,
 }
 
+/// Wall-clock seconds spent in each phase of the step so far (for
+/// benchmarks; results never depend on them).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// Node pass (gather, integrate, supports).
+    pub nodes: f64,
+    /// Element pass (kinematics, material, forces).
+    pub elements: f64,
+    /// Contact broad phase (candidate lists).
+    pub broad_phase: f64,
+    /// Contact narrow phase and assembly, pressure loads.
+    pub surface: f64,
+    /// Stable-step updates.
+    pub time_step: f64,
+}
+
+/// One active contact, for read-out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactInfo {
+    /// The contacting node.
+    pub node: u32,
+    /// The facet it touches (its two nodes).
+    pub facet: [u32; 2],
+    /// Position of its projection on the facet, `ξ ∈ [0, 1]`.
+    pub xi: f64,
+    /// Normal gap (m, negative = penetration).
+    pub gap: f64,
+    /// Normal force (N/m).
+    pub normal_force: f64,
+    /// Tangential force (N/m).
+    pub tangential_force: f64,
+    /// Whether it slipped in the last step.
+    pub slipping: bool,
+}
+
 /// A running explicit FDEM simulation: all state, and the thread pool that
 /// advances it.
 pub struct Simulation {
@@ -82,6 +118,7 @@ pub struct Simulation {
     pub(crate) contact_damping_force: Vec<Vec2>,
     pub(crate) contact: Option<ContactModel>,
     pub(crate) contact_stats: ContactStats,
+    pub(crate) phase_times: PhaseTimes,
     /// Highest frequency of every element at the last stable-step update.
     pub(crate) omega: Vec<f64>,
     pub(crate) gravity: Vec2,
@@ -149,9 +186,13 @@ impl Simulation {
     /// Pressure and contact forces at the current configuration; `dt` is the
     /// step just taken (for the tangential slip increment).
     fn surface_forces(&mut self, dt: f64) {
+        let clock = Instant::now();
         self.eval_amplitudes(self.time);
         passes::pressure_forces(&self.nodes.x, &self.pressure, &self.amplitude_values, &mut self.pressure_force);
         if let Some(contact) = &mut self.contact {
+            let broad = Instant::now();
+            contact.broad.update(&self.surface, &self.nodes.x);
+            self.phase_times.broad_phase += broad.elapsed().as_secs_f64();
             let sum = contact.evaluate(
                 &self.surface,
                 &self.nodes.x,
@@ -170,6 +211,7 @@ impl Simulation {
                 contacts: sum.contacts,
             };
         }
+        self.phase_times.surface += clock.elapsed().as_secs_f64();
     }
 
     /// Re-evaluates the stable step (DESIGN §4.2): `s · min` over the
@@ -179,6 +221,7 @@ impl Simulation {
     /// doubles it, a free partner node doubles the relative frequency²),
     /// reduced for the contact dashpot; or the fixed step.
     pub fn update_time_step(&mut self) {
+        let clock = Instant::now();
         let pool = Arc::clone(&self.pool);
         let crit = pool.install(|| {
             let Simulation { nodes, elems, omega, .. } = self;
@@ -220,6 +263,7 @@ impl Simulation {
         });
         self.dt_critical = crit;
         self.dt = self.settings.fixed_dt.unwrap_or(self.settings.safety * crit);
+        self.phase_times.time_step += clock.elapsed().as_secs_f64();
     }
 
     /// Advances one step.
@@ -227,6 +271,7 @@ impl Simulation {
         let dt = self.dt;
         let dt_avg = 0.5 * (self.dt_prev + dt);
         self.eval_amplitudes(self.time + 0.5 * dt);
+        let clock = Instant::now();
         {
             let Simulation { nodes, elems, node_partials, .. } = self;
             let inp = NodeInputs {
@@ -248,6 +293,7 @@ impl Simulation {
             };
             passes::node_pass(&inp, &mut nodes.x, &mut nodes.v, node_partials);
         }
+        self.phase_times.nodes += clock.elapsed().as_secs_f64();
         self.time += dt;
         self.step += 1;
         self.dt_prev = dt;
@@ -263,6 +309,7 @@ impl Simulation {
         if let Some((node, quantity)) = bad_node {
             return Err(RunError::NonFinite { node, quantity, step: self.step, time: self.time });
         }
+        let clock = Instant::now();
         {
             let Simulation { nodes, elems, elem_partials, .. } = self;
             let inp = ElementInputs {
@@ -278,6 +325,7 @@ impl Simulation {
             };
             passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, elem_partials);
         }
+        self.phase_times.elements += clock.elapsed().as_secs_f64();
         let mut bad_element = None;
         for p in &self.elem_partials {
             self.energies.internal_work += p.internal;
