@@ -21,7 +21,10 @@ import fdem  # noqa: E402
 
 
 def build(size: float, width: float, height: float) -> fdem.Model:
-    sets = [fdem.JointSet(90, 60.0, 30.0, 2.0, name="vertical"), fdem.JointSet(0, 30.0, 15.0, 3.0, name="horizontal")]
+    sets = [
+        fdem.JointSet(90, 60.0, 30.0, 2.0, name="vertical"),
+        fdem.JointSet(0, 30.0, 15.0, 3.0, name="horizontal"),
+    ]
     mesh = fdem.jointed_rectangle(width, height, size, sets)
     rock = fdem.Elastic(E=60e9, nu=0.25, rho=3100.0)
     model = fdem.Model(mesh, material=rock).set_gravity(0.0, -30.41e3 / 3100.0)
