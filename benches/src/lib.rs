@@ -54,6 +54,7 @@ pub fn block(nx: usize, ny: usize) -> ModelSpec {
 /// four nodes), touching their neighbours node on node: every square side
 /// is a contact interface. Returns node positions and the boundary facets
 /// (counter-clockwise per square), `4 nx ny` of them.
+#[allow(clippy::type_complexity)]
 pub fn block_grid(nx: usize, ny: usize) -> (Vec<[f64; 2]>, Vec<[u32; 2]>, Vec<[f64; 2]>) {
     let mut x = Vec::with_capacity(4 * nx * ny);
     let mut facets = Vec::with_capacity(4 * nx * ny);

@@ -140,6 +140,7 @@ class Model:
         self._initial_velocity: NDArray[np.float64] | None = None
         self._initial_stress: NDArray[np.float64] | None = None
         self._contact: dict[str, Any] | None = None
+        self._fracture: dict[str, Any] | None = None
 
     @staticmethod
     def _check_material(name: str, m: Any) -> None:
@@ -270,6 +271,61 @@ class Model:
         }
         return self
 
+    def fracture(
+        self,
+        *,
+        check_every: int = 10,
+        edge_tolerance: float = 15.0,
+        crack_tolerance: float = 30.0,
+        min_quality: float = 0.2,
+        min_size: float = 0.25,
+        insert_at: float = 0.02,
+    ) -> Model:
+        """Switches on crack insertion by the rotating-crack model (paper
+        2.4, DESIGN §4.4). Every ``check_every`` steps the failure factors
+        of the elements (κ H / f_t, Mohr–Coulomb + Rankine materials) are
+        averaged at the nodes; at every node that has reached 1 a crack is
+        opened normal to σ1: along an existing edge within ``edge_tolerance``
+        degrees, else through the crossed element (split with its neighbour),
+        unless a new triangle would fall below ``min_quality`` (4√3 A / Σ l²,
+        1 for equilateral) or have an altitude (2A / longest edge) below
+        ``min_size`` times the smallest altitude of the initial mesh, when the
+        crack snaps to the nearer edge. The stable time step scales with the
+        smallest altitude, so ``min_size`` bounds how far fracturing can
+        shrink it. A crack face within ``crack_tolerance`` degrees means the
+        direction is already cracked. Only nodes still being driven (an
+        adjacent element has fractured further since the previous check) are
+        opened: fully softened debris is not cut again and again.
+
+        ``insert_at`` is the nodal failure factor F̄ at which a crack is
+        inserted. At 1 (the paper) the softening band has spent all of G_f
+        and the new crack is traction-free. Below 1 the crack comes earlier
+        and a cohesive bond across it (penalty: the ``cracks`` law's normal
+        stiffness) dissipates the rest, (1 − F̄)² G_f: bands of triangles
+        lock as they soften (docs/fracture.md) and an early crack sidesteps
+        that, so the dissipated energy stays G_f per unit crack length.
+        Needs :meth:`contact`: crack faces get its ``cracks`` law.
+        """
+        if int(check_every) != check_every or check_every < 1:
+            raise ValueError(f"check_every = {check_every!r} must be a positive integer")
+        e, c, q = number("edge_tolerance", edge_tolerance), number("crack_tolerance", crack_tolerance), number(
+            "min_quality", min_quality
+        )
+        if not 0 <= e <= 45:
+            raise ValueError(f"edge_tolerance = {e} must lie in [0, 45] degrees")
+        if not 0 <= c <= 90:
+            raise ValueError(f"crack_tolerance = {c} must lie in [0, 90] degrees")
+        if not 0 <= q <= 0.9:
+            raise ValueError(f"min_quality = {q} must lie in [0, 0.9]")
+        f = number("insert_at", insert_at)
+        if not 0 < f <= 1:
+            raise ValueError(f"insert_at = {f} must lie in (0, 1] (a nodal failure factor)")
+        s = number("min_size", min_size)
+        if not 0 <= s <= 1:
+            raise ValueError(f"min_size = {s} must lie in [0, 1] (a fraction of the smallest initial altitude)")
+        self._fracture = {"interval": int(check_every), "edge": e, "crack": c, "quality": q, "size": s, "insert_at": f}
+        return self
+
     # --- initial state ----------------------------------------------------
     def set_initial_velocity(
         self, value: tuple[float, float] | Any | Callable[[Any, Any], Any], where: str | Any | None = None
@@ -395,6 +451,18 @@ class Model:
                 crack_law=c["crack"],
                 contact_margin=c["margin"],
             )
+        if self._fracture is not None:
+            if self._contact is None:
+                raise ValueError("fracture needs contact: call model.contact(...) (crack faces are contact surfaces)")
+            f = self._fracture
+            out.update(
+                fracture_interval=f["interval"],
+                fracture_edge_tolerance=f["edge"],
+                fracture_crack_tolerance=f["crack"],
+                fracture_min_quality=f["quality"],
+                fracture_min_altitude=f["size"] * _smallest_altitude(self.mesh),
+                fracture_insert_at=f["insert_at"],
+            )
         if pf:
             out.update(
                 pressure_facets=np.concatenate(pf),
@@ -402,3 +470,12 @@ class Model:
                 pressure_amplitude=np.concatenate(pa),
             )
         return out
+
+
+def _smallest_altitude(mesh: Mesh) -> float:
+    """Smallest altitude 2A / l_max over the triangles of ``mesh`` (m)."""
+    p = mesh.points[mesh.triangles]
+    e = np.roll(p, -1, axis=1) - p
+    area2 = np.abs(e[:, 0, 0] * e[:, 1, 1] - e[:, 0, 1] * e[:, 1, 0])
+    longest = np.sqrt((e**2).sum(axis=2).max(axis=1))
+    return float((area2 / longest).min())

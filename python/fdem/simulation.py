@@ -181,9 +181,15 @@ class Simulation:
         ``contacts`` (now)."""
         return dict(self._core.contact_stats())
 
+    @property
+    def insertions(self) -> int:
+        """Cracks inserted so far (nodes opened); 0 without fracture."""
+        return int(self._core.insertions or 0)
+
     def phase_times(self) -> dict[str, float]:
         """Wall-clock seconds spent so far in each phase of the step
-        (``nodes``, ``elements``, ``broad_phase``, ``surface``, ``time_step``);
+        (``nodes``, ``elements``, ``broad_phase``, ``surface``, ``time_step``,
+        ``fracture``);
         for profiling, results never depend on them."""
         return dict(self._core.phase_times())
 
@@ -191,6 +197,20 @@ class Simulation:
         """The free-surface facets (n, 2), body on their left, and the index of
         each one's interface law (0: free boundary)."""
         return self._core.surface_facets()
+
+    def insertion_audit(self) -> dict[str, float] | None:
+        """The largest relative change of total ``mass`` and of linear
+        ``momentum`` (over Σ m|v|) any crack insertion has caused so far;
+        both are zero in exact arithmetic (DESIGN §4.4). ``None`` without
+        fracture."""
+        return self._core.insertion_audit()
+
+    def bonds(self) -> dict[str, NDArray[Any]]:
+        """The intact cohesive bonds across cracks inserted before full
+        softening (``Model.fracture(insert_at=...)``): ``nodes`` (k, 2),
+        ``length`` (m), ``strength`` (Pa), ``final_opening`` (m),
+        ``max_opening`` (m) and ``damage`` (0–1)."""
+        return self._core.bonds()
 
     def energies(self) -> dict[str, float]:
         """The energy account (J per unit thickness): ``kinetic``, ``elastic``,

@@ -12,15 +12,19 @@
 //! * [`broad`]: candidate (node, facet) pairs from a parry2d BVH of facet
 //!   boxes enlarged by a margin, kept until some node has moved more than
 //!   half the margin.
+//! * [`cohesive`]: bonds that carry the rest of the fracture energy across
+//!   a crack inserted before its material had fully softened.
 //! * [`narrow`]: node-to-segment projection, penetration, forces spread to
 //!   the facet's nodes by its shape functions (eq. 2.7), assembly.
 
 pub mod broad;
+pub mod cohesive;
 pub mod law;
 pub mod narrow;
 pub mod surface;
 
 pub use broad::BroadPhase;
+pub use cohesive::{Bond, BondResponse};
 pub use law::{InterfaceLaw, LawError};
 pub use narrow::{ContactState, NodeContact};
 pub use surface::{Surface, SurfaceFacet};

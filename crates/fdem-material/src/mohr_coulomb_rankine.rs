@@ -304,6 +304,36 @@ impl MohrCoulombRankine {
         crack_band * self.tensile_strength * self.tensile_strength / (2.0 * self.fracture_energy)
     }
 
+    /// Crack-band width `h_c` (m) of an element of shape `geometry` for a
+    /// crack normal at `angle` (rad, co-rotational frame), by the law's rule.
+    pub fn band_width(&self, geometry: &Geometry, angle: f64) -> f64 {
+        match self.crack_band {
+            CrackBand::Oliver => geometry.width_along(angle),
+            CrackBand::Equivalent => (4.0 * geometry.area() / std::f64::consts::PI).sqrt(),
+        }
+    }
+
+    /// Re-regularises a softening state for a piece of a split element
+    /// (DESIGN §4.4): `h_c` scales with the piece's width over the parent's,
+    /// both measured along the crack normal (the band rule's width for
+    /// [`CrackBand::Equivalent`]), and κ by the inverse, so that the failure
+    /// factor and the softened strength are continuous and what the piece has
+    /// left to dissipate is `(1 − F)² G_f` per unit crack area, as for its
+    /// parent. A piece keeping the parent's wider band would be more brittle
+    /// than the material: it would fail with `G_f h_piece / h_parent`.
+    /// States that have not cracked are left alone.
+    pub fn rebase(&self, state: &mut PlasticState, parent: &Geometry, piece: &Geometry) {
+        if state.crack_band <= 0.0 {
+            return;
+        }
+        let (before, after) = (self.band_width(parent, state.direction), self.band_width(piece, state.direction));
+        if before > 0.0 && after > 0.0 {
+            let ratio = after / before;
+            state.kappa /= ratio;
+            state.crack_band *= ratio;
+        }
+    }
+
     /// Failure factor `F = κ / ε_c^f = κ H / f_t` (eq. 2.21); 1 means fully
     /// softened, 0 before the first crack.
     pub fn failure_factor(&self, state: &PlasticState) -> f64 {
@@ -528,10 +558,7 @@ impl MohrCoulombRankine {
         }
         if state.crack_band == 0.0 && tensile > tol {
             let geometry = geometry();
-            state.crack_band = match self.crack_band {
-                CrackBand::Oliver => geometry.width_along(sp.angle()),
-                CrackBand::Equivalent => (4.0 * geometry.area() / std::f64::consts::PI).sqrt(),
-            };
+            state.crack_band = self.band_width(&geometry, sp.angle());
         }
         let band = if state.crack_band > 0.0 { state.crack_band } else { 1.0 };
         let mut chosen: Option<(u8, PrincipalReturn)> = None;

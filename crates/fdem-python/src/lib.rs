@@ -16,8 +16,8 @@ use pyo3::types::PyDict;
 
 use fdem_solver::material_point::{material_point as drive_point, Path};
 use fdem_solver::{
-    Amplitude, Constraint, ContactSpec, CrackBand, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, PressureLoad,
-    RunError, Settings,
+    Amplitude, Bond, Constraint, ContactSpec, CrackBand, FractureParams, FractureSpec, InterfaceSpec, LawSpec,
+    MaterialSpec, ModelSpec, PressureLoad, RunError, Settings,
 };
 
 /// Runs `f`, turning a panic into a `RuntimeError`.
@@ -172,6 +172,7 @@ impl PySimulation {
         pressure_facets=None, pressure_values=None, pressure_amplitude=None,
         amplitudes=Vec::new(), initial_velocity=None, initial_stress=None,
         contact_laws=None, contact_facets=None, contact_facet_laws=None, crack_law=0, contact_margin=None,
+        fracture_interval=0, fracture_edge_tolerance=15.0, fracture_crack_tolerance=30.0, fracture_min_quality=0.2, fracture_min_altitude=0.0, fracture_insert_at=0.02,
         mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, threads=0
     ))]
     fn new(
@@ -196,6 +197,12 @@ impl PySimulation {
         contact_facet_laws: Option<PyReadonlyArray1<'_, i64>>,
         crack_law: u16,
         contact_margin: Option<f64>,
+        fracture_interval: u32,
+        fracture_edge_tolerance: f64,
+        fracture_crack_tolerance: f64,
+        fracture_min_quality: f64,
+        fracture_min_altitude: f64,
+        fracture_insert_at: f64,
         mass_damping: f64,
         stiffness_damping: f64,
         safety: f64,
@@ -309,6 +316,16 @@ impl PySimulation {
                 initial_velocity: initial_velocity.map(|a| rows::<2>("initial_velocity", &a)).transpose()?,
                 initial_stress: initial_stress.map(|a| rows::<4>("initial_stress", &a)).transpose()?,
                 contact,
+                fracture: (fracture_interval > 0).then(|| FractureSpec {
+                    params: FractureParams {
+                        edge_tolerance: fracture_edge_tolerance.to_radians(),
+                        crack_tolerance: fracture_crack_tolerance.to_radians(),
+                        min_quality: fracture_min_quality,
+                        min_altitude: fracture_min_altitude,
+                    },
+                    interval: fracture_interval,
+                    insert_at: fracture_insert_at,
+                }),
                 settings: Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval },
             };
             let sim = fdem_solver::Simulation::new(spec, threads).map_err(|e| value_error(e.to_string()))?;
@@ -491,6 +508,47 @@ impl PySimulation {
         Ok(d)
     }
 
+    /// Cracks inserted so far (nodes opened); `None` without fracture.
+    #[getter]
+    fn insertions(&self) -> Option<u64> {
+        self.sim.insertions()
+    }
+
+    /// The largest relative change of total mass (`mass`) and of linear
+    /// momentum over Σ m|v| (`momentum`) that any crack insertion has caused
+    /// so far; `None` without fracture.
+    fn insertion_audit<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.sim
+            .insertion_audit()
+            .map(|a| {
+                let d = PyDict::new(py);
+                d.set_item("mass", a.mass)?;
+                d.set_item("momentum", a.momentum)?;
+                Ok(d)
+            })
+            .transpose()
+    }
+
+    /// The intact cohesive bonds across cracks inserted before full softening:
+    /// `nodes` (k, 2) int64, `length` (m), `strength` t₀ (Pa),
+    /// `final_opening` δ_c (m), `max_opening` (m), `damage` (0–1), as a dict
+    /// of arrays.
+    fn bonds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        guard(|| {
+            let b = self.sim.bonds();
+            let d = PyDict::new(py);
+            let nodes: Vec<i64> = b.iter().flat_map(|b| b.nodes.map(i64::from)).collect();
+            d.set_item("nodes", Array2::from_shape_vec((b.len(), 2), nodes).expect("shape").into_pyarray(py))?;
+            let col = |f: &dyn Fn(&Bond) -> f64| b.iter().map(f).collect::<Vec<_>>().into_pyarray(py);
+            d.set_item("length", col(&|b| b.length))?;
+            d.set_item("strength", col(&|b| b.strength))?;
+            d.set_item("final_opening", col(&|b| b.final_opening))?;
+            d.set_item("max_opening", col(&|b| b.max_opening))?;
+            d.set_item("damage", col(&|b| 1.0 - b.secant(b.max_opening) / b.stiffness))?;
+            Ok(d)
+        })
+    }
+
     /// Wall-clock seconds spent so far in each phase of the step: `nodes`,
     /// `elements`, `broad_phase`, `surface` (narrow phase, assembly,
     /// pressure), `time_step`.
@@ -502,6 +560,7 @@ impl PySimulation {
         d.set_item("broad_phase", t.broad_phase)?;
         d.set_item("surface", t.surface)?;
         d.set_item("time_step", t.time_step)?;
+        d.set_item("fracture", t.fracture)?;
         Ok(d)
     }
 
@@ -575,6 +634,8 @@ impl PySimulation {
             d.set_item("contact_damping", e.contact_damping)?;
             d.set_item("contact_elastic", e.contact_elastic)?;
             d.set_item("contact_work", e.contact_work)?;
+            d.set_item("remeshing", e.remeshing)?;
+            d.set_item("cohesive_elastic", e.cohesive_elastic)?;
             d.set_item("residual", e.residual())?;
             Ok(d)
         })
@@ -641,6 +702,7 @@ fn material_point<'py>(
 /// refinement): returns `(points (n, 2), triangles (m, 3), constraint edges
 /// (k, 2))`. See `fdem_mesh::generate::triangulate`.
 #[pyfunction]
+#[allow(clippy::type_complexity)]
 fn triangulate<'py>(
     py: Python<'py>,
     outline: PyReadonlyArray2<'py, f64>,
@@ -669,6 +731,7 @@ fn triangulate<'py>(
 /// triangles and, for every appended node, its parent. See
 /// `fdem_mesh::split::split_along_edges`.
 #[pyfunction]
+#[allow(clippy::type_complexity)]
 fn split_along_edges<'py>(
     py: Python<'py>,
     n_nodes: usize,

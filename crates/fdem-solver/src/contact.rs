@@ -14,7 +14,7 @@ use crate::NONE;
 /// Contact state and settings owned by the simulation.
 pub(crate) struct ContactModel {
     pub laws: Vec<InterfaceLaw>,
-    /// Laws other than 0 by facet (sorted node pair).
+    /// Laws other than 0 by facet (sorted pair of the nodes' ancestors).
     pub facet_laws: BTreeMap<(u32, u32), u16>,
     /// Law of crack faces.
     pub crack_law: u16,
@@ -35,6 +35,12 @@ pub(crate) struct ContactModel {
 }
 
 impl ContactModel {
+    /// Normal stiffness of the crack law (Pa/m): the penalty of cohesive
+    /// bonds across cracks.
+    pub fn crack_stiffness(&self) -> f64 {
+        self.laws[self.crack_law as usize].normal_stiffness
+    }
+
     /// Checks and builds the contact model.
     pub fn new(spec: &ContactSpec, n_nodes: usize) -> Result<Self, SetupError> {
         if spec.laws.is_empty() {
@@ -85,9 +91,10 @@ impl ContactModel {
         })
     }
 
-    /// The law of facet `(a, b)`.
-    pub fn law_of(&self, a: u32, b: u32) -> u16 {
-        self.facet_laws.get(&(a.min(b), a.max(b))).copied().unwrap_or(0)
+    /// The law of the facet whose nodes have the (sorted) ancestor pair
+    /// `pair`.
+    pub fn law_of(&self, pair: (u32, u32)) -> u16 {
+        self.facet_laws.get(&pair).copied().unwrap_or(0)
     }
 
     /// Adapts to a new surface (after a topology change): friction memory

@@ -27,7 +27,8 @@ pub struct Energies {
     pub viscous_damping: f64,
     /// Dissipated by Mohr–Coulomb plastic flow.
     pub plastic: f64,
-    /// Dissipated by tensile softening (fracture).
+    /// Dissipated by fracture: tensile softening in the elements and the
+    /// damage of cohesive bonds.
     pub fracture: f64,
     /// Dissipated by friction (slip) on contacts.
     pub friction: f64,
@@ -35,8 +36,16 @@ pub struct Energies {
     pub contact_damping: f64,
     /// Elastic energy in the contact penalty springs now.
     pub contact_elastic: f64,
-    /// Work done on the nodes by contact forces (a diagnostic: ideally
-    /// `−(contact_elastic + friction + contact_damping)`).
+    /// Elastic energy in the cohesive bonds across young cracks now (their
+    /// dissipation is part of `fracture`).
+    pub cohesive_elastic: f64,
+    /// Kinetic energy lost when cracks are inserted (mass moved to new nodes
+    /// with interpolated velocities; ≥ 0, second order in the velocity
+    /// differences across the split edges).
+    pub remeshing: f64,
+    /// Work done on the nodes by contact and bond forces (a diagnostic:
+    /// ideally `−(contact_elastic + friction + contact_damping +
+    /// cohesive_elastic + bond dissipation)`).
     pub contact_work: f64,
     /// Internal work `∫ σ : D dV dt` done on the elements; equals the elastic
     /// energy change plus plastic and fracture dissipation up to the
@@ -63,6 +72,8 @@ impl Energies {
             + self.friction
             + self.contact_damping
             + self.contact_elastic
+            + self.cohesive_elastic
+            + self.remeshing
     }
 }
 

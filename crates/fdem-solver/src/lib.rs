@@ -20,6 +20,7 @@
 mod contact;
 mod energy;
 mod error;
+mod fracture;
 mod loads;
 pub mod material_point;
 mod model;
@@ -31,8 +32,11 @@ mod topology;
 
 pub use energy::Energies;
 pub use error::{RunError, SetupError};
+pub use fdem_contact::Bond;
+pub use fdem_fracture::FractureParams;
 pub use fdem_material::{CrackBand, PlasticState};
 pub use fdem_mesh::validate as validate_mesh;
+pub use fracture::InsertionAudit;
 
 /// Mesh generation and editing, re-exported for the bindings.
 pub mod mesh {
@@ -40,7 +44,7 @@ pub mod mesh {
     pub use fdem_mesh::split::split_along_edges;
 }
 pub use loads::{Amplitude, Constraint, PressureLoad};
-pub use model::{ContactSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Settings};
+pub use model::{ContactSpec, FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Settings};
 pub use simulation::{ContactInfo, ContactStats, PhaseTimes, Simulation};
 
 /// Nodes or elements per parallel work item. Fixed, so that partial sums

@@ -89,8 +89,25 @@ pub struct ModelSpec {
     pub initial_stress: Option<Vec<[f64; 4]>>,
     /// Contact between free surfaces, if enabled.
     pub contact: Option<ContactSpec>,
+    /// Crack insertion, if enabled (needs contact).
+    pub fracture: Option<FractureSpec>,
     /// Run settings.
     pub settings: Settings,
+}
+
+/// Crack insertion (paper 2.4, DESIGN §4.4, docs/fracture.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FractureSpec {
+    /// Where cracks go and which triangles they may create.
+    pub params: fdem_fracture::FractureParams,
+    /// Steps between checks (≥ 1).
+    pub interval: u32,
+    /// Nodal failure factor `F̄` at which a crack is inserted, in `(0, 1]`.
+    /// At 1 (the paper) the band has fully softened and the crack is
+    /// traction-free; below 1 the crack is inserted earlier and a cohesive
+    /// bond across it dissipates the remaining `(1 − F̄)² G_f`, which avoids
+    /// the stress locking of softening bands in triangles.
+    pub insert_at: f64,
 }
 
 /// Contact between the free surfaces (DESIGN §4.5).

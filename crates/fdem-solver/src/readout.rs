@@ -194,6 +194,23 @@ impl Simulation {
             .collect()
     }
 
+    /// Cracks inserted so far (nodes opened), or `None` without fracture.
+    pub fn insertions(&self) -> Option<u64> {
+        self.fracture.as_ref().map(|f| f.insertions)
+    }
+
+    /// The largest relative change of mass and momentum any insertion has
+    /// caused, or `None` without fracture.
+    pub fn insertion_audit(&self) -> Option<crate::fracture::InsertionAudit> {
+        self.fracture.as_ref().map(|f| f.audit)
+    }
+
+    /// The intact cohesive bonds across young cracks (empty without
+    /// fracture).
+    pub fn bonds(&self) -> &[crate::Bond] {
+        self.fracture.as_ref().map_or(&[], |f| &f.bonds)
+    }
+
     /// Wall-clock time spent in each phase so far.
     pub fn phase_times(&self) -> PhaseTimes {
         self.phase_times

@@ -16,7 +16,7 @@ use crate::loads::Constraint;
 use crate::model::{LawSpec, ModelSpec};
 use crate::passes::{self, Material, NO_BC};
 use crate::simulation::{check_settings, invalid, ContactStats, Elements, Nodes, PhaseTimes, Simulation};
-use crate::topology::{build_surface, resolve_pressures};
+use crate::topology::{ancestor_pair, build_surface, resolve_pressures};
 use crate::CHUNK;
 
 impl Simulation {
@@ -170,10 +170,37 @@ impl Simulation {
             check_amp(p.amplitude, format!("the pressure on facet ({}, {})", p.nodes[0], p.nodes[1]))?;
         }
         let mut contact = spec.contact.as_ref().map(|c| ContactModel::new(c, n)).transpose()?;
+        let fracture = match spec.fracture {
+            None => None,
+            Some(crate::model::FractureSpec { params, interval, insert_at }) => {
+                if contact.is_none() {
+                    return invalid("fracture needs contact (the crack faces are contact surfaces)".into());
+                }
+                if interval == 0 {
+                    return invalid("fracture check interval must be at least 1 step".into());
+                }
+                let ok = |v: f64, lo: f64, hi: f64| v.is_finite() && v >= lo && v <= hi;
+                let in_range = ok(params.edge_tolerance, 0.0, std::f64::consts::FRAC_PI_4)
+                    && ok(params.crack_tolerance, 0.0, std::f64::consts::FRAC_PI_2)
+                    && ok(params.min_quality, 0.0, 0.9)
+                    && ok(params.min_altitude, 0.0, f64::MAX)
+                    && insert_at > 0.0
+                    && insert_at <= 1.0;
+                if !in_range {
+                    return invalid(format!(
+                        "fracture parameters out of range: edge_tolerance in [0, 45] deg, crack_tolerance in [0, 90] \
+                         deg, min_quality in [0, 0.9], min_altitude ≥ 0 m, insert_at in (0, 1] (got {params:?}, insert_at {insert_at})"
+                    ));
+                }
+                Some(crate::fracture::FractureModel::new(params, interval, insert_at))
+            }
+        };
         let active = vec![true; m];
-        let surface =
-            build_surface(&conn, &active, &spec.points, |a, b| contact.as_ref().map_or(0, |c| c.law_of(a, b)));
-        let pressure = resolve_pressures(&surface, &spec.pressures, true).map_err(SetupError::Invalid)?;
+        let ancestor: Vec<u32> = (0..n as u32).collect();
+        let surface = build_surface(&conn, &active, &spec.points, |a, b| {
+            contact.as_ref().map_or(0, |c| c.law_of(ancestor_pair(&ancestor, a, b)))
+        });
+        let pressure = resolve_pressures(&surface, &spec.pressures, &ancestor, true).map_err(SetupError::Invalid)?;
         if let Some(c) = &mut contact {
             c.adopt(None, &surface);
         }
@@ -222,12 +249,14 @@ impl Simulation {
             amplitude_values: vec![1.0; spec.amplitudes.len()],
             amplitudes: spec.amplitudes,
             pressure_loads: spec.pressures,
+            ancestor,
             pressure,
             pressure_force: vec![[0.0; 2]; nb],
             contact_force: if contact.is_some() { vec![[0.0; 2]; nb] } else { Vec::new() },
             contact_damping_force: if contact.is_some() { vec![[0.0; 2]; nb] } else { Vec::new() },
             surface,
             contact,
+            fracture,
             contact_stats: ContactStats::default(),
             phase_times: PhaseTimes::default(),
             omega: vec![0.0; m],

@@ -73,6 +73,8 @@ pub struct PhaseTimes {
     pub surface: f64,
     /// Stable-step updates.
     pub time_step: f64,
+    /// Fracture checks and crack insertion (topology rebuilds included).
+    pub fracture: f64,
 }
 
 /// One active contact, for read-out.
@@ -104,8 +106,12 @@ pub struct Simulation {
     pub(crate) constraints: Vec<Constraint>,
     pub(crate) amplitudes: Vec<Amplitude>,
     pub(crate) amplitude_values: Vec<f64>,
-    /// Pressure loads as given (re-resolved after topology changes).
+    /// Pressure loads as given, by ancestor node pairs (re-resolved after
+    /// topology changes).
     pub(crate) pressure_loads: Vec<PressureLoad>,
+    /// The original node each node descends from (itself for a node of the
+    /// model or a new node on a split edge; the split node for a copy).
+    pub(crate) ancestor: Vec<u32>,
     /// The free surfaces of the current mesh.
     pub(crate) surface: Surface,
     /// Pressure loads resolved on the surface.
@@ -117,6 +123,7 @@ pub struct Simulation {
     /// Their contact-dashpot parts (N), whose work is the contact damping.
     pub(crate) contact_damping_force: Vec<Vec2>,
     pub(crate) contact: Option<ContactModel>,
+    pub(crate) fracture: Option<crate::fracture::FractureModel>,
     pub(crate) contact_stats: ContactStats,
     pub(crate) phase_times: PhaseTimes,
     /// Highest frequency of every element at the last stable-step update.
@@ -210,6 +217,7 @@ impl Simulation {
                 candidate_pairs: contact.broad.pairs() as u64,
                 contacts: sum.contacts,
             };
+            self.bond_forces();
         }
         self.phase_times.surface += clock.elapsed().as_secs_f64();
     }
@@ -257,6 +265,32 @@ impl Simulation {
                     let w = (we * we + wc2).sqrt();
                     let xi = contact.max_damping * wc2.sqrt() / w;
                     crit = crit.min(2.0 / w * ((1.0 + xi * xi).sqrt() - xi));
+                }
+            }
+            if let Some(fr) = &self.fracture {
+                // a bond adds k ℓ (1/m_a + 1/m_b) to the frequency² of its
+                // nodes, on top of their elements and contact springs
+                let k_c = self.contact.as_ref().map_or(0.0, |c| c.max_stiffness);
+                for bond in &fr.bonds {
+                    let [a, b] = bond.nodes.map(|v| v as usize);
+                    let (ma, mb) = (self.nodes.mass[a], self.nodes.mass[b]);
+                    if ma <= 0.0 || mb <= 0.0 {
+                        continue;
+                    }
+                    let node_w2 = |v: usize, m: f64| {
+                        let we =
+                            self.node_elems.row(v).iter().map(|&i| self.omega[(i / 3) as usize]).fold(0.0, f64::max);
+                        let bi = self.surface.index_of[v];
+                        let wc2 = if bi == crate::NONE {
+                            0.0
+                        } else {
+                            4.0 * k_c * self.surface.tributary_max(bi as usize) / m
+                        };
+                        we * we + wc2
+                    };
+                    let wb2 = bond.stiffness * bond.length * (1.0 / ma + 1.0 / mb);
+                    let w = (node_w2(a, ma).max(node_w2(b, mb)) + wb2).sqrt();
+                    crit = crit.min(2.0 / w);
                 }
             }
             crit
@@ -336,6 +370,15 @@ impl Simulation {
         }
         if let Some(element) = bad_element {
             return Err(RunError::InvertedElement { element, step: self.step, time: self.time });
+        }
+        if self.fracture.as_ref().is_some_and(|f| self.step % f.interval as u64 == 0) {
+            let clock = Instant::now();
+            // a change of topology rebuilds forces (and contact) itself
+            let changed = self.fracture_check();
+            self.phase_times.fracture += clock.elapsed().as_secs_f64();
+            if changed {
+                return Ok(()); // rebuilt forces, contact and the stable step
+            }
         }
         self.surface_forces(dt);
         if self.settings.fixed_dt.is_none() && self.step % self.settings.dt_interval as u64 == 0 {

@@ -29,25 +29,40 @@ pub(crate) fn build_surface(
     Surface::new(x_ref.len(), &list, x_ref, &apex)
 }
 
-/// Resolves pressure loads on the surface: each must be a boundary facet
-/// (either orientation); it gets the surface's orientation (body on the
-/// left). With `strict`, a load off the boundary is an error (at set-up);
-/// otherwise it is dropped (its facet was excavated or split).
+/// The sorted pair of two nodes' ancestors: the key under which a facet's
+/// law and loads are remembered through node splits.
+#[inline]
+pub(crate) fn ancestor_pair(ancestor: &[u32], a: u32, b: u32) -> (u32, u32) {
+    let (x, y) = (ancestor[a as usize], ancestor[b as usize]);
+    (x.min(y), x.max(y))
+}
+
+/// Resolves pressure loads (given by ancestor node pairs) on the surface:
+/// each must be a boundary facet (either orientation); it gets the
+/// surface's orientation (body on the left). Both faces of a facet that a
+/// crack has split keep the load if both are on the boundary. With
+/// `strict`, a load off the boundary is an error (at set-up); otherwise it
+/// is dropped (its facet was excavated).
 pub(crate) fn resolve_pressures(
     surface: &Surface,
     loads: &[PressureLoad],
+    ancestor: &[u32],
     strict: bool,
 ) -> Result<Vec<PressureFacet>, String> {
-    let by_pair: BTreeMap<(u32, u32), [u32; 2]> =
-        surface.facets.iter().map(|f| ((f.nodes[0].min(f.nodes[1]), f.nodes[0].max(f.nodes[1])), f.nodes)).collect();
+    let mut by_pair: BTreeMap<(u32, u32), Vec<[u32; 2]>> = BTreeMap::new();
+    for f in &surface.facets {
+        by_pair.entry(ancestor_pair(ancestor, f.nodes[0], f.nodes[1])).or_default().push(f.nodes);
+    }
     let mut out = Vec::with_capacity(loads.len());
     for p in loads {
         let [a, b] = p.nodes;
         match by_pair.get(&(a.min(b), a.max(b))) {
-            Some(&nodes) => {
-                let bnodes = nodes.map(|n| surface.index_of[n as usize]);
-                debug_assert!(bnodes.iter().all(|&b| b != NONE));
-                out.push(PressureFacet { nodes, bnodes, pressure: p.pressure, amplitude: p.amplitude });
+            Some(list) => {
+                for &nodes in list {
+                    let bnodes = nodes.map(|n| surface.index_of[n as usize]);
+                    debug_assert!(bnodes.iter().all(|&b| b != NONE));
+                    out.push(PressureFacet { nodes, bnodes, pressure: p.pressure, amplitude: p.amplitude });
+                }
             }
             None if strict => {
                 return Err(format!("pressure facet ({a}, {b}) is not an edge on the boundary of the mesh"));
@@ -56,4 +71,72 @@ pub(crate) fn resolve_pressures(
         }
     }
     Ok(out)
+}
+
+/// Node→element incidence of the active elements (items `3e + k`).
+pub(crate) fn active_node_elements(n_nodes: usize, conn: &[[u32; 3]], active: &[bool]) -> fdem_mesh::Csr {
+    fdem_mesh::Csr::from_pairs(
+        n_nodes,
+        conn.iter()
+            .enumerate()
+            .filter(|(e, _)| active[*e])
+            .flat_map(|(e, t)| (0..3).map(move |k| (t[k] as usize, (e * 3 + k) as u32))),
+    )
+}
+
+impl crate::simulation::Simulation {
+    /// Rebuilds everything derived from the connectivity after a topology
+    /// change: node→element lists, lumped masses, the free surfaces (facet
+    /// laws by ancestor pairs), pressure facets, contact buffers and
+    /// friction memory, per-chunk buffers, forces and the stable step.
+    #[allow(dead_code)] // for staged excavation (issue 6)
+    pub(crate) fn rebuild_topology(&mut self) {
+        self.rebuild_structure();
+        self.refresh_forces();
+        self.update_time_step();
+    }
+
+    /// The part of [`Self::rebuild_topology`] that does not evaluate forces:
+    /// adjacency, masses, surface, loads, contact state and buffers.
+    pub(crate) fn rebuild_structure(&mut self) {
+        let n = self.nodes.x.len();
+        let m = self.elems.conn.len();
+        self.node_elems = active_node_elements(n, &self.elems.conn, &self.elems.active);
+        self.nodes.mass.clear();
+        self.nodes.mass.resize(n, 0.0);
+        for (e, t) in self.elems.conn.iter().enumerate() {
+            if !self.elems.active[e] {
+                continue;
+            }
+            let x = [self.nodes.x0[t[0] as usize], self.nodes.x0[t[1] as usize], self.nodes.x0[t[2] as usize]];
+            let nodal = fdem_element::lumped_mass(
+                self.materials[self.elems.material[e] as usize].density,
+                fdem_element::signed_area(&x),
+            );
+            for &v in t {
+                self.nodes.mass[v as usize] += nodal;
+            }
+        }
+        let ancestor = &self.ancestor;
+        let contact = &self.contact;
+        let surface = build_surface(&self.elems.conn, &self.elems.active, &self.nodes.x0, |a, b| {
+            contact.as_ref().map_or(0, |c| c.law_of(ancestor_pair(ancestor, a, b)))
+        });
+        self.pressure = resolve_pressures(&surface, &self.pressure_loads, &self.ancestor, false).unwrap_or_default();
+        let nb = surface.nodes.len();
+        self.pressure_force.clear();
+        self.pressure_force.resize(nb, [0.0; 2]);
+        if let Some(c) = &mut self.contact {
+            c.adopt(Some(&self.surface), &surface);
+            self.contact_force.clear();
+            self.contact_force.resize(nb, [0.0; 2]);
+            self.contact_damping_force.clear();
+            self.contact_damping_force.resize(nb, [0.0; 2]);
+        }
+        self.surface = surface;
+        self.node_partials.resize(n.div_ceil(crate::CHUNK), Default::default());
+        self.elem_partials.resize(m.div_ceil(crate::CHUNK), Default::default());
+        self.omega.resize(m, 0.0);
+        self.elems.force.resize(3 * m, [0.0; 2]);
+    }
 }

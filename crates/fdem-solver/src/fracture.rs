@@ -1,0 +1,458 @@
+//! Crack insertion in the time loop (paper 2.4, DESIGN §4.4): every
+//! `interval` steps the nodal failure factors are averaged, cracks are
+//! inserted at the nodes that have reached 1, and the state is carried
+//! through the topology edits.
+
+use fdem_contact::Bond;
+use fdem_element::kinematics::{deformation_gradient, polar_rotation, reference_inverse, signed_area};
+use fdem_element::{ReferenceShape, Vec2};
+use fdem_fracture::{nodal_failure, plan, Edits, FractureParams, NewNode, NodeFailure};
+use rayon::prelude::*;
+
+use crate::loads::PressureLoad;
+use crate::passes::{reference_geometry, NO_BC};
+use crate::simulation::Simulation;
+use crate::topology::ancestor_pair;
+
+/// Fracture settings and scratch buffers.
+pub(crate) struct FractureModel {
+    pub params: FractureParams,
+    /// Steps between checks.
+    pub interval: u32,
+    /// Nodal failure factor at which a crack is inserted, in `(0, 1]`.
+    pub insert_at: f64,
+    /// Cohesive bonds across cracks inserted before full softening.
+    pub bonds: Vec<Bond>,
+    /// Per node: lies on a crack (a crack face ends at it).
+    pub cracked: Vec<bool>,
+    /// Cracks inserted so far (nodes opened).
+    pub insertions: u64,
+    /// Largest relative change of total mass and of linear momentum caused
+    /// by an insertion so far (both zero in exact arithmetic).
+    pub audit: InsertionAudit,
+    node_factor: Vec<f64>,
+    node_direction: Vec<f64>,
+    element_factor: Vec<f64>,
+    element_direction: Vec<f64>,
+    areas: Vec<f64>,
+    /// Each element's failure factor at the previous check: an element whose
+    /// factor has grown since, from below 1, is still being torn apart.
+    factor_seen: Vec<f64>,
+    candidates: Vec<u32>,
+}
+
+impl FractureModel {
+    pub fn new(params: FractureParams, interval: u32, insert_at: f64) -> Self {
+        Self {
+            params,
+            interval,
+            insert_at,
+            bonds: Vec::new(),
+            cracked: Vec::new(),
+            insertions: 0,
+            audit: InsertionAudit::default(),
+            node_factor: Vec::new(),
+            node_direction: Vec::new(),
+            element_factor: Vec::new(),
+            element_direction: Vec::new(),
+            areas: Vec::new(),
+            factor_seen: Vec::new(),
+            candidates: Vec::new(),
+        }
+    }
+}
+
+/// How well insertions have kept mass and momentum (DESIGN §4.4: both are
+/// unchanged by an insertion).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct InsertionAudit {
+    /// Largest `|ΔM| / M` over the insertion checks so far.
+    pub mass: f64,
+    /// Largest `|ΔP| / Σ m|v|` over the insertion checks so far.
+    pub momentum: f64,
+}
+
+impl InsertionAudit {
+    fn record(&mut self, before: (f64, Vec2, f64), after: (f64, Vec2, f64)) {
+        let (m0, p0, scale) = before;
+        let (m1, p1, _) = after;
+        self.mass = self.mass.max((m1 - m0).abs() / m0.max(f64::MIN_POSITIVE));
+        let dp = (p1[0] - p0[0]).hypot(p1[1] - p0[1]);
+        if scale > 0.0 {
+            self.momentum = self.momentum.max(dp / scale);
+        }
+    }
+}
+
+impl Simulation {
+    /// Total mass, linear momentum `Σ m v` and `Σ m |v|` (the scale of
+    /// momentum errors), summed in node order.
+    fn mass_and_momentum(&self) -> (f64, Vec2, f64) {
+        let (mut m, mut p, mut s) = (0.0, [0.0; 2], 0.0);
+        for (mi, v) in self.nodes.mass.iter().zip(&self.nodes.v) {
+            m += mi;
+            p[0] += mi * v[0];
+            p[1] += mi * v[1];
+            s += mi * v[0].hypot(v[1]);
+        }
+        (m, p, s)
+    }
+
+    /// One fracture check; returns whether any crack was inserted.
+    pub(crate) fn fracture_check(&mut self) -> bool {
+        let Some(mut fr) = self.fracture.take() else { return false };
+        let m = self.elems.conn.len();
+        let n = self.nodes.x.len();
+        fr.element_factor.resize(m, 0.0);
+        fr.element_direction.resize(m, 0.0);
+        fr.areas.resize(m, 0.0);
+        fr.node_factor.resize(n, 0.0);
+        fr.node_direction.resize(n, 0.0);
+        {
+            let (x, conn, reference, state, material) =
+                (&self.nodes.x, &self.elems.conn, &self.elems.reference, &self.elems.state, &self.elems.material);
+            let materials = &self.materials;
+            fr.element_factor
+                .par_iter_mut()
+                .zip(fr.element_direction.par_iter_mut())
+                .zip(fr.areas.par_iter_mut())
+                .enumerate()
+                .with_min_len(crate::CHUNK)
+                .for_each(|(e, ((f, d), a))| {
+                    let t = conn[e];
+                    let xe = [x[t[0] as usize], x[t[1] as usize], x[t[2] as usize]];
+                    *a = signed_area(&xe);
+                    *f = materials[material[e] as usize].plastic.as_ref().map_or(0.0, |l| l.failure_factor(&state[e]));
+                    *d = if *f > 0.0 {
+                        let (c, s) = polar_rotation(deformation_gradient(&reference[e], &xe));
+                        state[e].direction + s.atan2(c)
+                    } else {
+                        0.0
+                    };
+                });
+        }
+        nodal_failure(
+            &self.node_elems,
+            &fr.areas,
+            &self.elems.active,
+            &fr.element_factor,
+            &fr.element_direction,
+            &mut fr.node_factor,
+            &mut fr.node_direction,
+        );
+        // a candidate has reached the insertion factor and is still being
+        // driven: some element around it was softening (F < 1) at the last
+        // check and has fractured further since. Debris (F stays put) and
+        // fully softened elements stretching at zero stress do not drive a
+        // crack; without this rule they would be cut again at every check.
+        fr.factor_seen.resize(m, 0.0);
+        fr.cracked.resize(n, false);
+        let driven = |p: u32| {
+            self.node_elems.row(p as usize).iter().any(|&item| {
+                let e = (item / 3) as usize;
+                let seen = fr.factor_seen[e];
+                self.elems.active[e] && seen < 1.0 && fr.element_factor[e] > seen
+            })
+        };
+        let mut candidates = std::mem::take(&mut fr.candidates);
+        candidates.clear();
+        candidates.extend((0..n as u32).filter(|&p| {
+            let i = p as usize;
+            fr.node_factor[i] >= fr.insert_at && self.nodes.mass[i] > 0.0 && driven(p)
+        }));
+        let mut edits = Edits::default();
+        let mut owed: Vec<Option<(f64, f64)>> = Vec::new();
+        if !candidates.is_empty() {
+            candidates
+                .sort_by(|&a, &b| fr.node_factor[b as usize].total_cmp(&fr.node_factor[a as usize]).then(a.cmp(&b)));
+            edits = plan(
+                &self.elems.conn,
+                &self.elems.active,
+                &self.node_elems,
+                &self.nodes.x,
+                &candidates,
+                &NodeFailure { normal: &fr.node_direction, cracked: &fr.cracked },
+                &fr.params,
+            );
+            // what each new crack still owes, from the mesh before the edits
+            owed = edits.inserted_at.iter().map(|&p| self.remaining_softening(&fr, p)).collect();
+        }
+        fr.candidates = candidates;
+        self.fracture = Some(fr);
+        if edits.inserted_at.is_empty() {
+            self.remember_factors();
+            return false;
+        }
+        let before = self.mass_and_momentum();
+        self.apply_edits(&edits);
+        let after = self.mass_and_momentum();
+        let stiffness = self.contact.as_ref().map_or(0.0, |c| c.crack_stiffness());
+        let mut fr = self.fracture.take().expect("fracture model");
+        fr.insertions += edits.inserted_at.len() as u64;
+        fr.audit.record(before, after);
+        fr.cracked.resize(self.nodes.x.len(), false);
+        for &[p, w] in &edits.crack_faces {
+            fr.cracked[p as usize] = true;
+            fr.cracked[w as usize] = true;
+        }
+        // every node split in this check, with its copies
+        let mut family: Vec<(u32, Vec<u32>)> = edits.inserted_at.iter().map(|&p| (p, vec![p])).collect();
+        for (i, nn) in edits.new_nodes.iter().enumerate() {
+            let NewNode::Copy { of } = *nn else { continue };
+            fr.cracked[n + i] = true;
+            if let Some((_, f)) = family.iter_mut().find(|(p, _)| *p == of) {
+                f.push((n + i) as u32);
+            }
+        }
+        let members = |v: u32| family.iter().find(|(p, _)| *p == v).map_or_else(|| vec![v], |(_, f)| f.clone());
+        // old bonds at a split node go to the copies that share its crack
+        // faces with the partner, in proportion to those faces
+        let old = std::mem::take(&mut fr.bonds);
+        for bond in old {
+            let [a, b] = bond.nodes;
+            if !family.iter().any(|(p, _)| *p == a || *p == b) {
+                fr.bonds.push(bond);
+                continue;
+            }
+            for &u in &members(a) {
+                for &v in &members(b) {
+                    let length = self.shared_crack_length(u, v);
+                    if length > 0.0 {
+                        fr.bonds.push(Bond { nodes: [u, v], length, ..bond });
+                    }
+                }
+            }
+        }
+        // new cracks that still owe fracture energy get bonds between the
+        // pieces of the split node that face each other across them
+        for (k, (_, f)) in family.iter().enumerate() {
+            let Some((strength, final_opening)) = owed[k] else { continue };
+            for (i, &u) in f.iter().enumerate() {
+                for &v in &f[i + 1..] {
+                    let length = self.shared_crack_length(u, v);
+                    if length > 0.0 {
+                        fr.bonds.push(Bond {
+                            nodes: [u, v],
+                            length,
+                            stiffness,
+                            strength,
+                            final_opening,
+                            max_opening: 0.0,
+                        });
+                    }
+                }
+            }
+        }
+        self.fracture = Some(fr);
+        self.refresh_forces();
+        self.update_time_step();
+        self.remember_factors();
+        true
+    }
+
+    /// Half the reference length of the crack faces at `u` that face crack
+    /// faces at `v` (the same segment seen from its two sides: far ends of
+    /// the same ancestor) (m): the tributary length of a bond `(u, v)`.
+    fn shared_crack_length(&self, u: u32, v: u32) -> f64 {
+        let Some(crack_law) = self.contact.as_ref().map(|c| c.crack_law) else { return 0.0 };
+        let s = &self.surface;
+        let faces = |node: u32| {
+            let bi = s.index_of[node as usize];
+            let row: &[u32] = if bi == crate::NONE { &[] } else { s.node_facets.row(bi as usize) };
+            row.iter().map(|&k| &s.facets[k as usize]).filter(|f| f.law == crack_law).map(move |f| {
+                let far = if f.nodes[0] == node { f.nodes[1] } else { f.nodes[0] };
+                (far, f.length)
+            })
+        };
+        faces(u)
+            .filter(|&(far, _)| faces(v).any(|(g, _)| self.ancestor[g as usize] == self.ancestor[far as usize]))
+            .map(|(_, length)| 0.5 * length)
+            .sum()
+    }
+
+    /// Records every element's failure factor for the next check's "still
+    /// driven" test.
+    fn remember_factors(&mut self) {
+        let Some(fr) = &mut self.fracture else { return };
+        let (state, material, materials) = (&self.elems.state, &self.elems.material, &self.materials);
+        fr.factor_seen.resize(state.len(), 0.0);
+        fr.factor_seen.par_iter_mut().enumerate().with_min_len(crate::CHUNK).for_each(|(e, f)| {
+            *f = materials[material[e] as usize].plastic.as_ref().map_or(0.0, |l| l.failure_factor(&state[e]));
+        });
+    }
+
+    /// Adds the forces of the intact bonds at `xⁿ` to the contact forces of
+    /// their (boundary) nodes, books their dissipation as fracture energy,
+    /// and drops the bonds that broke.
+    pub(crate) fn bond_forces(&mut self) {
+        let Some(fr) = &mut self.fracture else { return };
+        if fr.bonds.is_empty() {
+            self.energies.cohesive_elastic = 0.0;
+            return;
+        }
+        let (x, index_of) = (&self.nodes.x, &self.surface.index_of);
+        let (mut dissipated, mut elastic) = (0.0, 0.0);
+        let force = &mut self.contact_force;
+        fr.bonds.retain_mut(|bond| {
+            let [a, b] = bond.nodes;
+            let r = bond.update(x[a as usize], x[b as usize]);
+            dissipated += r.dissipated;
+            elastic += r.elastic;
+            let (ia, ib) = (index_of[a as usize], index_of[b as usize]);
+            if ia != crate::NONE && ib != crate::NONE {
+                let (fa, fb) = (&mut force[ia as usize], r.force);
+                fa[0] -= fb[0];
+                fa[1] -= fb[1];
+                let fb_node = &mut force[ib as usize];
+                fb_node[0] += fb[0];
+                fb_node[1] += fb[1];
+            }
+            !r.broken
+        });
+        self.energies.fracture += dissipated;
+        self.energies.cohesive_elastic = elastic;
+    }
+
+    /// The strength `t₀ = f_t (1 − F)` (Pa) and final opening
+    /// `δ_c = 2 G_f (1 − F) / f_t` (m) of a bond across a crack inserted at
+    /// node `p`, with `F`, `f_t` and `G_f` those of the most softened element
+    /// around `p`: the bond continues that element's softening curve, so
+    /// band and bond together dissipate `G_f` per unit crack length, and it
+    /// is no stronger than any element beside it, so the crack, not the
+    /// band, takes up the opening (docs/fracture.md). `None` once that
+    /// element has fully softened (the paper's traction-free crack).
+    fn remaining_softening(&self, fr: &FractureModel, p: u32) -> Option<(f64, f64)> {
+        let mut most: Option<(f64, usize)> = None;
+        for &item in self.node_elems.row(p as usize) {
+            let e = (item / 3) as usize;
+            let f = fr.element_factor[e];
+            if self.elems.active[e] && f > 0.0 && most.is_none_or(|(g, _)| f > g) {
+                most = Some((f, e));
+            }
+        }
+        let (f, e) = most?;
+        if f >= 1.0 {
+            return None;
+        }
+        let law = self.materials[self.elems.material[e] as usize].plastic.as_ref()?;
+        let (ft, gf) = (law.tensile_strength, law.fracture_energy);
+        Some((ft * (1.0 - f), 2.0 * gf * (1.0 - f) / ft))
+    }
+
+    /// Carries the state through the edits: new nodes (copies keep position,
+    /// velocity and supports; edge nodes are interpolated linearly, which
+    /// keeps mass and linear momentum exactly), split elements (children
+    /// inherit stress and material state), crack faces (crack law), split
+    /// facets (their law and loads), then rebuilds the topology.
+    pub(crate) fn apply_edits(&mut self, edits: &Edits) {
+        let kinetic = |s: &Self| -> f64 {
+            s.nodes.mass.iter().zip(&s.nodes.v).map(|(m, v)| 0.5 * m * (v[0] * v[0] + v[1] * v[1])).sum()
+        };
+        let before = kinetic(self);
+        for nn in &edits.new_nodes {
+            let id = self.nodes.x.len() as u32;
+            match *nn {
+                NewNode::Copy { of } => {
+                    let o = of as usize;
+                    self.nodes.x0.push(self.nodes.x0[o]);
+                    self.nodes.x.push(self.nodes.x[o]);
+                    self.nodes.v.push(self.nodes.v[o]);
+                    self.ancestor.push(self.ancestor[o]);
+                    let b = self.nodes.bc[o];
+                    self.push_constraint_copy(b, id);
+                }
+                NewNode::OnEdge { a, b, t } => {
+                    let lerp = |p: [f64; 2], q: [f64; 2]| [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
+                    let (a, b) = (a as usize, b as usize);
+                    self.nodes.x0.push(lerp(self.nodes.x0[a], self.nodes.x0[b]));
+                    self.nodes.x.push(lerp(self.nodes.x[a], self.nodes.x[b]));
+                    self.nodes.v.push(lerp(self.nodes.v[a], self.nodes.v[b]));
+                    self.ancestor.push(id);
+                    // a node on a supported edge is supported alike
+                    let (ba, bb) = (self.nodes.bc[a], self.nodes.bc[b]);
+                    let same = ba != NO_BC && bb != NO_BC && {
+                        let (ca, cb) = (&self.constraints[ba as usize], &self.constraints[bb as usize]);
+                        ca.fixed == cb.fixed && ca.value == cb.value && ca.amplitude == cb.amplitude
+                    };
+                    self.push_constraint_copy(if same { ba } else { NO_BC }, id);
+                }
+            }
+            self.nodes.mass.push(0.0);
+        }
+        for &(e, c) in &edits.changed {
+            self.elems.conn[e as usize] = c;
+        }
+        for &(parent, c) in &edits.added {
+            let p = parent as usize;
+            self.elems.conn.push(c);
+            self.elems.material.push(self.elems.material[p]);
+            self.elems.active.push(self.elems.active[p]);
+            self.elems.stress.push(self.elems.stress[p]);
+            self.elems.state.push(self.elems.state[p]);
+            self.elems.reference.push(self.elems.reference[p]);
+        }
+        let m0 = self.elems.reference.len() - edits.added.len();
+        // split elements and their pieces: the parent's reference shape, for
+        // re-regularising their softening bands
+        let mut parents: Vec<(u32, ReferenceShape)> =
+            edits.added.iter().map(|&(p, _)| (p, self.elems.reference[p as usize])).collect();
+        parents.sort_unstable_by_key(|&(p, _)| p);
+        parents.dedup_by_key(|&mut (p, _)| p);
+        let touched = edits.changed.iter().map(|&(e, _)| e as usize).chain(m0..self.elems.conn.len());
+        for e in touched {
+            let t = self.elems.conn[e];
+            let x = [self.nodes.x0[t[0] as usize], self.nodes.x0[t[1] as usize], self.nodes.x0[t[2] as usize]];
+            if let Some(r) = reference_inverse(&x) {
+                self.elems.reference[e] = r;
+            }
+        }
+        let parent_of = |e: usize| if e >= m0 { Some(edits.added[e - m0].0) } else { Some(e as u32) };
+        for e in edits.changed.iter().map(|&(e, _)| e as usize).chain(m0..self.elems.conn.len()) {
+            let Some(p) = parent_of(e) else { continue };
+            let Ok(k) = parents.binary_search_by_key(&p, |&(q, _)| q) else { continue };
+            if let Some(law) = &self.materials[self.elems.material[e] as usize].plastic {
+                let (before, after) = (reference_geometry(&parents[k].1), reference_geometry(&self.elems.reference[e]));
+                law.rebase(&mut self.elems.state[e], &before, &after);
+            }
+        }
+        let anc = &self.ancestor;
+        let mut new_loads = Vec::new();
+        for &([q, r], m) in &edits.split_edges {
+            let old = ancestor_pair(anc, q, r);
+            let (aq, ar) = (anc[q as usize], anc[r as usize]);
+            if let Some(c) = &mut self.contact {
+                if let Some(&law) = c.facet_laws.get(&old) {
+                    c.facet_laws.insert(ancestor_pair(anc, q, m), law);
+                    c.facet_laws.insert(ancestor_pair(anc, m, r), law);
+                }
+            }
+            for load in &self.pressure_loads {
+                let [a, b] = load.nodes;
+                if (a.min(b), a.max(b)) == old {
+                    new_loads.push(PressureLoad { nodes: [aq, m], ..*load });
+                    new_loads.push(PressureLoad { nodes: [m, ar], ..*load });
+                }
+            }
+        }
+        self.pressure_loads.extend(new_loads);
+        if let Some(c) = &mut self.contact {
+            for &[p, w] in &edits.crack_faces {
+                c.facet_laws.insert(ancestor_pair(anc, p, w), c.crack_law);
+            }
+        }
+        self.rebuild_structure();
+        self.energies.remeshing += before - kinetic(self);
+    }
+
+    /// Gives node `id` a copy of constraint `b` (if any).
+    fn push_constraint_copy(&mut self, b: u32, id: u32) {
+        if b == NO_BC {
+            self.nodes.bc.push(NO_BC);
+        } else {
+            let mut c = self.constraints[b as usize];
+            c.node = id;
+            self.nodes.bc.push(self.constraints.len() as u32);
+            self.constraints.push(c);
+        }
+    }
+}
