@@ -367,6 +367,49 @@ class Mesh:
         return cls(points, triangles, facet_sets=facet_sets, node_sets=node_sets)
 
     @classmethod
+    def polygon(
+        cls,
+        outline: Any,
+        size: float,
+        *,
+        min_angle: float = 25.0,
+        max_nodes: int = 2_000_000,
+    ) -> Mesh:
+        """An unstructured mesh of a polygon (constrained Delaunay with
+        refinement, no dependencies).
+
+        Parameters
+        ----------
+        outline : array_like, shape (k, 2)
+            Corners in order (either orientation, not self-intersecting), m.
+        size : float
+            Target element edge length (m): triangles have an area of at most
+            ``√3/4 size²`` and no angle below ``min_angle`` (degrees) where the
+            geometry allows.
+        max_nodes : int
+            Refinement stops (with an error) beyond this many nodes.
+
+        The facet set ``boundary`` holds the outline's edges.
+        """
+        pts = float_array("outline", outline, (None, 2))
+        s = positive("size", size)
+        points, triangles, _ = _core.triangulate(
+            np.ascontiguousarray(pts), np.zeros((0, 4)), np.sqrt(3) / 4 * s * s, float(min_angle), int(max_nodes)
+        )
+        mesh = cls(points, triangles)
+        return mesh.with_sets(facet_sets={"boundary": mesh.boundary_facets()})
+
+    @classmethod
+    def disc(cls, radius: float, size: float, *, center: tuple[float, float] = (0.0, 0.0)) -> Mesh:
+        """An unstructured mesh of a disc of ``radius`` (m) about ``center``,
+        its circle a polygon of sides about ``size`` long (see
+        :meth:`polygon`). The facet set ``boundary`` holds the rim."""
+        r, s = positive("radius", radius), positive("size", size)
+        k = max(12, int(np.ceil(2 * np.pi * r / s)))
+        a = 2 * np.pi * np.arange(k) / k
+        return cls.polygon(np.column_stack([center[0] + r * np.cos(a), center[1] + r * np.sin(a)]), s)
+
+    @classmethod
     def read(cls, path: str | os.PathLike[str]) -> Mesh:
         """Reads a triangle mesh with meshio (gmsh ``.msh``, ``.vtu``, …).
 

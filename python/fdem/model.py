@@ -308,8 +308,10 @@ class Model:
         """
         if int(check_every) != check_every or check_every < 1:
             raise ValueError(f"check_every = {check_every!r} must be a positive integer")
-        e, c, q = number("edge_tolerance", edge_tolerance), number("crack_tolerance", crack_tolerance), number(
-            "min_quality", min_quality
+        e, c, q = (
+            number("edge_tolerance", edge_tolerance),
+            number("crack_tolerance", crack_tolerance),
+            number("min_quality", min_quality),
         )
         if not 0 <= e <= 45:
             raise ValueError(f"edge_tolerance = {e} must lie in [0, 45] degrees")
@@ -359,7 +361,20 @@ class Model:
     def _field(name: str, value: Any, xy: Any, cols: int, n: int, total: int, ids: Any) -> NDArray[np.float64]:
         if callable(value):
             out = value(xy[:, 0], xy[:, 1])
-            return float_array(f"{name} (returned by the function)", np.broadcast_to(out, (n, cols)), (n, cols))
+            label = f"{name} (returned by the function)"
+            if isinstance(out, (tuple, list)) and len(out) == cols:
+                # one entry per component, each a scalar or an array over the points
+                try:
+                    out = np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), (n,)) for c in out])
+                except ValueError as exc:
+                    raise ValueError(f"{label}: each of the {cols} components must be a number or {n} values") from exc
+            try:
+                out = np.broadcast_to(out, (n, cols))
+            except ValueError:
+                raise ValueError(
+                    f"{label}: expected shape ({n}, {cols}) or {cols} components, got shape {np.shape(out)}"
+                ) from None
+            return float_array(label, out, (n, cols))
         if np.ndim(value) == 1:
             return np.broadcast_to(float_array(name, value, (cols,)), (n, cols)).copy()
         full = float_array(name, value, (None, cols))
