@@ -111,6 +111,16 @@ class Simulation:
         return int(self._core.steps)
 
     @property
+    def n_nodes(self) -> int:
+        """Nodes now (crack insertion adds some)."""
+        return int(self._core.n_nodes)
+
+    @property
+    def n_elements(self) -> int:
+        """Elements now (crack insertion splits some)."""
+        return int(self._core.n_elements)
+
+    @property
     def time_step(self) -> float:
         """The step in use (s)."""
         return float(self._core.time_step)

@@ -8,6 +8,12 @@
 //! list holds, per boundary node, its candidate facets in ascending order,
 //! whatever the tree layout, so results do not depend on the thread count
 //! or on whether the tree was rebuilt or refitted.
+//!
+//! Tree leaves are the facets' stable keys ([`SurfaceFacet::key`]), so a
+//! topology change (crack insertion, excavation) removes and inserts only
+//! the leaves that changed and refits, instead of rebuilding the tree.
+//!
+//! [`SurfaceFacet::key`]: crate::SurfaceFacet::key
 
 use parry2d_f64::bounding_volume::Aabb;
 use parry2d_f64::math::Vector;
@@ -39,6 +45,12 @@ pub struct BroadPhase {
     /// Builds (rebuilds and refits) so far.
     pub builds: u64,
     fresh: bool,
+    /// The surface changed since the last build.
+    changed: bool,
+    /// Keys of the leaves in the tree, ascending.
+    keys: Vec<u32>,
+    /// Facet index of each key in the current surface, or `NONE`.
+    facet_of_key: Vec<u32>,
 }
 
 impl BroadPhase {
@@ -56,18 +68,22 @@ impl BroadPhase {
             refits: 0,
             builds: 0,
             fresh: true,
+            changed: false,
+            keys: Vec::new(),
+            facet_of_key: Vec::new(),
         }
     }
 
-    /// Forgets the tree (after a topology change): the next update rebuilds.
+    /// Notes a change of the surface (a topology change): the next update
+    /// brings the tree and the candidate list up to date.
     pub fn invalidate(&mut self) {
-        self.fresh = true;
+        self.changed = true;
     }
 
     /// Whether some boundary node has moved more than half the margin since
     /// the last build.
     pub fn needs_update(&self, surface: &Surface, x: &[Vec2]) -> bool {
-        if self.fresh || self.built_at.len() != surface.nodes.len() {
+        if self.fresh || self.changed || self.built_at.len() != surface.nodes.len() {
             return true;
         }
         let limit = 0.25 * self.margin * self.margin;
@@ -101,16 +117,50 @@ impl BroadPhase {
                 Vector::new(a[0].max(b[0]) + m, a[1].max(b[1]) + m),
             );
         });
-        if self.fresh || self.refits >= REFITS_PER_REBUILD || self.bvh.leaf_count() as usize != nf {
-            self.bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &self.boxes);
+        if self.fresh || self.changed {
+            // key → facet of the new surface
+            let max_key = surface.facets.last().map_or(0, |f| f.key as usize + 1);
+            self.facet_of_key.clear();
+            self.facet_of_key.resize(max_key.max(self.keys.last().map_or(0, |&k| k as usize + 1)), crate::NONE);
+            for (i, f) in surface.facets.iter().enumerate() {
+                self.facet_of_key[f.key as usize] = i as u32;
+            }
+        }
+        if self.fresh || self.refits >= REFITS_PER_REBUILD || nf < 3 {
+            self.bvh = if nf < 3 {
+                let mut bvh = Bvh::new();
+                for (f, bx) in surface.facets.iter().zip(&self.boxes) {
+                    bvh.insert(*bx, f.key);
+                }
+                bvh
+            } else {
+                Bvh::from_iter(
+                    BvhBuildStrategy::Binned,
+                    surface.facets.iter().zip(&self.boxes).map(|(f, bx)| (f.key as usize, *bx)),
+                )
+            };
             self.refits = 0;
         } else {
-            for (k, bx) in self.boxes.iter().enumerate() {
-                self.bvh.insert_or_update_partially(*bx, k as u32, 0.0);
+            if self.changed {
+                // leaves whose facet has gone
+                for &k in &self.keys {
+                    if self.facet_of_key[k as usize] == crate::NONE {
+                        self.bvh.remove(k);
+                    }
+                }
+            }
+            for (f, bx) in surface.facets.iter().zip(&self.boxes) {
+                self.bvh.insert_or_update_partially(*bx, f.key, 0.0);
             }
             self.bvh.refit_without_opt();
             self.refits += 1;
         }
+        if self.fresh || self.changed {
+            self.keys.clear();
+            self.keys.extend(surface.facets.iter().map(|f| f.key));
+            // the facet_of_key entries of removed keys are NONE already
+        }
+        self.changed = false;
         self.fresh = false;
         self.builds += 1;
         self.built_at.clear();
@@ -119,7 +169,7 @@ impl BroadPhase {
         let n_chunks = surface.nodes.len().div_ceil(CHUNK);
         self.chunk_lists.resize_with(n_chunks, Vec::new);
         self.chunk_counts.resize_with(n_chunks, Vec::new);
-        let bvh = &self.bvh;
+        let (bvh, facet_of_key) = (&self.bvh, &self.facet_of_key);
         surface
             .nodes
             .par_chunks(CHUNK)
@@ -131,7 +181,8 @@ impl BroadPhase {
                     let p = x[n as usize];
                     let q = Aabb::new(Vector::new(p[0], p[1]), Vector::new(p[0], p[1]));
                     let start = list.len();
-                    for k in bvh.intersect_aabb(&q) {
+                    for leaf in bvh.intersect_aabb(&q) {
+                        let k = facet_of_key[leaf as usize];
                         let f = surface.facets[k as usize].nodes;
                         if f[0] != n && f[1] != n {
                             list.push(k);

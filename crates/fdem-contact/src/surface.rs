@@ -18,6 +18,11 @@ pub struct SurfaceFacet {
     /// Deepest penetration accepted behind this facet (m): half the height
     /// of its element over it. A node deeper than this is on the far side.
     pub depth: f64,
+    /// A stable identity that survives rebuilds of the surface (the solver
+    /// uses `3 e + k`, edge `k` of element `e`), ascending along `facets`:
+    /// lets the broad phase and the friction memory follow a facet through
+    /// topology changes.
+    pub key: u32,
 }
 
 /// The free surfaces of the current mesh.
@@ -37,7 +42,15 @@ impl Surface {
     /// Builds the surface of a mesh with `n_nodes` nodes from its boundary
     /// facets `(nodes, law)`, the reference positions and, per facet, the
     /// reference position of its element's third node.
+    /// Facets are keyed by their position; see [`Surface::with_keys`].
     pub fn new(n_nodes: usize, facets: &[([u32; 2], u16)], x_ref: &[Vec2], apex: &[Vec2]) -> Self {
+        let keys: Vec<u32> = (0..facets.len() as u32).collect();
+        Self::with_keys(n_nodes, facets, x_ref, apex, &keys)
+    }
+
+    /// [`Surface::new`] with a stable key per facet (strictly ascending).
+    pub fn with_keys(n_nodes: usize, facets: &[([u32; 2], u16)], x_ref: &[Vec2], apex: &[Vec2], keys: &[u32]) -> Self {
+        debug_assert!(keys.windows(2).all(|w| w[0] < w[1]));
         let mut surface_facets = Vec::with_capacity(facets.len());
         for (k, &([a, b], law)) in facets.iter().enumerate() {
             let (pa, pb) = (x_ref[a as usize], x_ref[b as usize]);
@@ -45,7 +58,7 @@ impl Surface {
             let length = d[0].hypot(d[1]);
             let c = apex[k];
             let height = ((c[0] - pa[0]) * d[1] - (c[1] - pa[1]) * d[0]).abs() / length;
-            surface_facets.push(SurfaceFacet { nodes: [a, b], law, length, depth: 0.5 * height });
+            surface_facets.push(SurfaceFacet { nodes: [a, b], law, length, depth: 0.5 * height, key: keys[k] });
         }
         let mut on = vec![false; n_nodes];
         for f in &surface_facets {

@@ -549,9 +549,11 @@ impl PySimulation {
         })
     }
 
-    /// Wall-clock seconds spent so far in each phase of the step: `nodes`,
-    /// `elements`, `broad_phase`, `surface` (narrow phase, assembly,
-    /// pressure), `time_step`.
+    /// Wall-clock seconds spent so far in each phase of the step, each
+    /// counted once: `nodes`, `elements`, `broad_phase`, `surface` (narrow
+    /// phase, assembly, pressure, bonds), `time_step`, `fracture` (checks and
+    /// planning), `topology` (applying insertions: rebuilds, forces and the
+    /// stable step of the new mesh).
     fn phase_times<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let t = self.sim.phase_times();
         let d = PyDict::new(py);
@@ -561,6 +563,7 @@ impl PySimulation {
         d.set_item("surface", t.surface)?;
         d.set_item("time_step", t.time_step)?;
         d.set_item("fracture", t.fracture)?;
+        d.set_item("topology", t.topology)?;
         Ok(d)
     }
 

@@ -106,12 +106,13 @@ impl ContactModel {
         }
         let mut states = vec![ContactState::default(); new.nodes.len()];
         if let Some(old) = old {
-            let facet_id: BTreeMap<(u32, u32), u32> = new
-                .facets
-                .iter()
-                .enumerate()
-                .map(|(k, f)| ((f.nodes[0].min(f.nodes[1]), f.nodes[0].max(f.nodes[1])), k as u32))
-                .collect();
+            // a facet keeps its key through a rebuild; a contact stays on it
+            // if it still joins the same two nodes
+            let max_key = new.facets.last().map_or(0, |f| f.key as usize + 1);
+            let mut facet_of_key = vec![NONE; max_key];
+            for (k, f) in new.facets.iter().enumerate() {
+                facet_of_key[f.key as usize] = k as u32;
+            }
             for (b, &node) in new.nodes.iter().enumerate() {
                 let ob = old.index_of.get(node as usize).copied().unwrap_or(NONE);
                 if ob == NONE || ob as usize >= self.states.len() {
@@ -121,8 +122,9 @@ impl ContactModel {
                 if s.facet == NONE {
                     continue;
                 }
-                let [a, c] = old.facets[s.facet as usize].nodes;
-                if let Some(&f) = facet_id.get(&(a.min(c), a.max(c))) {
+                let of = &old.facets[s.facet as usize];
+                let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
+                if f != NONE && new.facets[f as usize].nodes == of.nodes {
                     states[b] = ContactState { facet: f, elastic_gap: s.elastic_gap };
                 }
             }

@@ -183,6 +183,8 @@ impl Simulation {
             self.remember_factors();
             return false;
         }
+        let clock = std::time::Instant::now();
+        let inner = (self.phase_times.surface, self.phase_times.broad_phase, self.phase_times.time_step);
         let before = self.mass_and_momentum();
         self.apply_edits(&edits);
         let after = self.mass_and_momentum();
@@ -244,8 +246,17 @@ impl Simulation {
             }
         }
         self.fracture = Some(fr);
-        self.refresh_forces();
-        self.update_time_step();
+        let m0 = m as u32;
+        let mut touched: Vec<u32> =
+            edits.changed.iter().map(|&(e, _)| e).chain(m0..self.elems.conn.len() as u32).collect();
+        touched.sort_unstable();
+        touched.dedup();
+        self.refresh_forces_of(&touched);
+        self.update_time_step_for(Some(&touched));
+        // the rebuild's surface forces and stable step count as topology
+        let pt = &mut self.phase_times;
+        (pt.surface, pt.broad_phase, pt.time_step) = inner;
+        pt.topology += clock.elapsed().as_secs_f64();
         self.remember_factors();
         true
     }

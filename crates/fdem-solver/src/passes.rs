@@ -2,7 +2,7 @@
 //! [`CHUNK`](crate::CHUNK) entities and writes one partial per chunk.
 
 use fdem_element::batch::{corotational_frames, TriLanes, LANES};
-use fdem_element::kinematics::ReferenceShape;
+use fdem_element::kinematics::{deformation_gradient, polar_rotation, ReferenceShape};
 use fdem_element::stability::max_frequency;
 use fdem_element::tensor::rotate;
 use fdem_element::{internal_forces, Vec2};
@@ -267,6 +267,53 @@ pub(crate) fn pressure_forces(x: &[Vec2], facets: &[PressureFacet], amplitude_va
             out[b as usize][1] += f[1];
         }
     }
+}
+
+/// Internal forces of the listed elements at `x` from their stored
+/// co-rotational stress (no stress update, no viscous part): what a
+/// topology change needs for the elements it created or reshaped; the
+/// others keep theirs.
+pub(crate) fn element_forces_of(inp: &ElementInputs<'_>, elems: &[u32], stress: &[[f64; 4]], force: &mut [Vec2]) {
+    for &e in elems {
+        let e = e as usize;
+        let out = &mut force[3 * e..3 * e + 3];
+        if !inp.active[e] {
+            out.copy_from_slice(&[[0.0; 2]; 3]);
+            continue;
+        }
+        let x = gather(inp.x, inp.conn[e]);
+        let (c, s) = polar_rotation(deformation_gradient(&inp.reference[e], &x));
+        out.copy_from_slice(&internal_forces(&x, &rotate(stress[e], c, s)));
+    }
+}
+
+/// `ω_e` of the listed elements into `omega` (0 for inactive ones).
+pub(crate) fn element_frequencies_of(inp: &ElementInputs<'_>, elems: &[u32], omega: &mut [f64]) {
+    for &e in elems {
+        let e = e as usize;
+        omega[e] = if inp.active[e] {
+            let mat = &inp.materials[inp.material[e] as usize];
+            max_frequency(&gather(inp.x, inp.conn[e]), mat.elastic.lambda, mat.elastic.mu, mat.density)
+        } else {
+            0.0
+        };
+    }
+}
+
+/// The smallest critical step `2/ω_e` over `omega`, reduced for stiffness
+/// damping `beta` (s); order-independent.
+pub(crate) fn critical_from_frequencies(omega: &[f64], beta: f64) -> f64 {
+    omega
+        .par_iter()
+        .with_min_len(CHUNK)
+        .map(|&w| {
+            if w <= 0.0 {
+                return f64::INFINITY;
+            }
+            let xi = 0.5 * beta * w;
+            2.0 / w * ((1.0 + xi * xi).sqrt() - xi)
+        })
+        .reduce(|| f64::INFINITY, |a, b| if b < a || a.is_nan() { b } else { a })
 }
 
 /// Highest frequency `ω_e` of every active element (0 for inactive ones)

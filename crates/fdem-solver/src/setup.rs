@@ -197,7 +197,8 @@ impl Simulation {
         };
         let active = vec![true; m];
         let ancestor: Vec<u32> = (0..n as u32).collect();
-        let surface = build_surface(&conn, &active, &spec.points, |a, b| {
+        let incidence = node_elements(n, &conn);
+        let surface = build_surface(&conn, &active, &incidence, &spec.points, |a, b| {
             contact.as_ref().map_or(0, |c| c.law_of(ancestor_pair(&ancestor, a, b)))
         });
         let pressure = resolve_pressures(&surface, &spec.pressures, &ancestor, true).map_err(SetupError::Invalid)?;
@@ -230,7 +231,7 @@ impl Simulation {
             .num_threads(threads)
             .build()
             .map_err(|e| SetupError::Invalid(format!("cannot start {threads} threads: {e}")))?;
-        let node_elems = node_elements(n, &conn);
+        let node_elems = incidence;
         let nb = surface.nodes.len();
         let mut sim = Simulation {
             nodes: Nodes { x0: spec.points.clone(), x: spec.points, v, mass, bc },

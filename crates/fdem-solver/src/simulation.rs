@@ -73,8 +73,13 @@ pub struct PhaseTimes {
     pub surface: f64,
     /// Stable-step updates.
     pub time_step: f64,
-    /// Fracture checks and crack insertion (topology rebuilds included).
+    /// Fracture checks: failure factors, nodal averages, planning the
+    /// insertions, bonds.
     pub fracture: f64,
+    /// Applying insertions: topology edits, rebuilt adjacency, masses,
+    /// surfaces and contact state, forces of the new mesh, the new stable
+    /// step.
+    pub topology: f64,
 }
 
 /// One active contact, for read-out.
@@ -190,6 +195,26 @@ impl Simulation {
         self.surface_forces(0.0);
     }
 
+    /// Forces after a topology change: the listed (new or reshaped)
+    /// elements' internal forces from their stress, then pressure, contact
+    /// and bond forces on the new surfaces. The other elements keep theirs.
+    pub(crate) fn refresh_forces_of(&mut self, touched: &[u32]) {
+        let Simulation { nodes, elems, .. } = self;
+        let inp = ElementInputs {
+            x: &nodes.x,
+            v: &nodes.v,
+            conn: &elems.conn,
+            reference: &elems.reference,
+            material: &elems.material,
+            active: &elems.active,
+            materials: &self.materials,
+            beta: 0.0,
+            dt: 0.0,
+        };
+        passes::element_forces_of(&inp, touched, &elems.stress, &mut elems.force);
+        self.surface_forces(0.0);
+    }
+
     /// Pressure and contact forces at the current configuration; `dt` is the
     /// step just taken (for the tangential slip increment).
     fn surface_forces(&mut self, dt: f64) {
@@ -229,6 +254,13 @@ impl Simulation {
     /// doubles it, a free partner node doubles the relative frequency²),
     /// reduced for the contact dashpot; or the fixed step.
     pub fn update_time_step(&mut self) {
+        self.update_time_step_for(None);
+    }
+
+    /// [`Self::update_time_step`], re-evaluating only the listed elements'
+    /// frequencies (the others are unchanged since the last evaluation) when
+    /// `touched` is given: after a topology change.
+    pub(crate) fn update_time_step_for(&mut self, touched: Option<&[u32]>) {
         let clock = Instant::now();
         let pool = Arc::clone(&self.pool);
         let crit = pool.install(|| {
@@ -244,7 +276,13 @@ impl Simulation {
                 beta: self.settings.stiffness_damping,
                 dt: 0.0,
             };
-            let mut crit = passes::element_frequencies(&inp, omega);
+            let mut crit = match touched {
+                None => passes::element_frequencies(&inp, omega),
+                Some(list) => {
+                    passes::element_frequencies_of(&inp, list, omega);
+                    passes::critical_from_frequencies(omega, self.settings.stiffness_damping)
+                }
+            };
             if let Some(contact) = &self.contact {
                 for (b, &node) in self.surface.nodes.iter().enumerate() {
                     let m = self.nodes.mass[node as usize];
@@ -373,9 +411,10 @@ impl Simulation {
         }
         if self.fracture.as_ref().is_some_and(|f| self.step % f.interval as u64 == 0) {
             let clock = Instant::now();
+            let topology = self.phase_times.topology;
             // a change of topology rebuilds forces (and contact) itself
             let changed = self.fracture_check();
-            self.phase_times.fracture += clock.elapsed().as_secs_f64();
+            self.phase_times.fracture += clock.elapsed().as_secs_f64() - (self.phase_times.topology - topology);
             if changed {
                 return Ok(()); // rebuilt forces, contact and the stable step
             }

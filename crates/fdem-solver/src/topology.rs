@@ -6,27 +6,64 @@ use std::collections::BTreeMap;
 
 use fdem_contact::Surface;
 use fdem_element::Vec2;
-use fdem_mesh::boundary_facets;
+use rayon::prelude::*;
 
 use crate::loads::PressureLoad;
 use crate::passes::PressureFacet;
 use crate::NONE;
 
 /// The free surfaces of the active elements, with the law of each facet
-/// from `law_of`.
+/// from `law_of`. A facet `(a, b)` of element `e` is free when no other
+/// active element holds both `a` and `b` (looked up in `node_elems`, the
+/// node→element lists of the active elements): linear in the element count
+/// and parallel, as crack insertion rebuilds it often. Facets come in
+/// element order, each element's edges `k = 0, 1, 2` (vertex `k` to
+/// `k + 1`), body on the left, keyed `3 e + k` (stable: elements keep their
+/// ids and vertex order through topology changes).
 pub(crate) fn build_surface(
     conn: &[[u32; 3]],
     active: &[bool],
+    node_elems: &fdem_mesh::Csr,
     x_ref: &[Vec2],
     law_of: impl Fn(u32, u32) -> u16,
 ) -> Surface {
-    let ids: Vec<u32> = (0..conn.len() as u32).filter(|&e| active[e as usize]).collect();
-    let sub: Vec<[u32; 3]> = ids.iter().map(|&e| conn[e as usize]).collect();
-    let facets = boundary_facets(&sub);
-    let list: Vec<([u32; 2], u16)> = facets.iter().map(|f| (f.nodes, law_of(f.nodes[0], f.nodes[1]))).collect();
-    let apex: Vec<Vec2> =
-        facets.iter().map(|f| x_ref[sub[f.element as usize][(f.local as usize + 2) % 3] as usize]).collect();
-    Surface::new(x_ref.len(), &list, x_ref, &apex)
+    let free: Vec<u8> = conn
+        .par_iter()
+        .enumerate()
+        .with_min_len(crate::CHUNK)
+        .map(|(e, t)| {
+            if !active[e] {
+                return 0;
+            }
+            let mut bits = 0u8;
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let shared = node_elems.row(a as usize).iter().any(|&item| {
+                    let f = (item / 3) as usize;
+                    f != e && active[f] && conn[f].contains(&b)
+                });
+                if !shared {
+                    bits |= 1 << k;
+                }
+            }
+            bits
+        })
+        .collect();
+    let mut list = Vec::new();
+    let mut apex = Vec::new();
+    let mut keys = Vec::new();
+    for (e, &bits) in free.iter().enumerate() {
+        for k in 0..3 {
+            if bits & (1 << k) != 0 {
+                let t = conn[e];
+                let nodes = [t[k], t[(k + 1) % 3]];
+                list.push((nodes, law_of(nodes[0], nodes[1])));
+                apex.push(x_ref[t[(k + 2) % 3] as usize]);
+                keys.push((3 * e + k) as u32);
+            }
+        }
+    }
+    Surface::with_keys(x_ref.len(), &list, x_ref, &apex, &keys)
 }
 
 /// The sorted pair of two nodes' ancestors: the key under which a facet's
@@ -119,10 +156,14 @@ impl crate::simulation::Simulation {
         }
         let ancestor = &self.ancestor;
         let contact = &self.contact;
-        let surface = build_surface(&self.elems.conn, &self.elems.active, &self.nodes.x0, |a, b| {
+        let surface = build_surface(&self.elems.conn, &self.elems.active, &self.node_elems, &self.nodes.x0, |a, b| {
             contact.as_ref().map_or(0, |c| c.law_of(ancestor_pair(ancestor, a, b)))
         });
-        self.pressure = resolve_pressures(&surface, &self.pressure_loads, &self.ancestor, false).unwrap_or_default();
+        self.pressure = if self.pressure_loads.is_empty() {
+            Vec::new()
+        } else {
+            resolve_pressures(&surface, &self.pressure_loads, &self.ancestor, false).unwrap_or_default()
+        };
         let nb = surface.nodes.len();
         self.pressure_force.clear();
         self.pressure_force.resize(nb, [0.0; 2]);

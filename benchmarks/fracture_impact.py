@@ -1,0 +1,98 @@
+"""All-in throughput of a fragmenting impact (issue 5): a jointless
+1 m × 0.5 m block (E 30 GPa, ν 0.25, ρ 2700 kg/m³, f_t 5 MPa, G_f 30 N/m,
+Mohr–Coulomb c 10 MPa, φ 35°) hits a fixed platen at 10 m/s; contact
+friction 0.6, penalty 10 E (normal stiffness 10 E / mean edge length).
+
+Reports all-in element-updates per second (Σ over steps of the elements of
+that step, divided by wall time: forces, fracture checks, insertions,
+contact and all), at each thread count, with the cracks inserted and the
+share of time in each phase: insertion (topology edits and the rebuilds
+they trigger), fracture checks, contact, element pass.
+
+Run: python benchmarks/fracture_impact.py [--elements 1e4 1e5] [--threads 1 2] [--duration 4e-4]
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # see elastic_step.py
+
+import argparse  # noqa: E402
+import math  # noqa: E402
+import platform  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import fdem  # noqa: E402
+
+WIDTH, HEIGHT, GAP, SPEED = 1.0, 0.5, 1e-3, 10.0
+
+
+def build(elements: float) -> fdem.Model:
+    """Block above a platen, meshed to about ``elements`` triangles in all."""
+    area = WIDTH * HEIGHT
+    size = math.sqrt(4 * area / (math.sqrt(3) * elements))  # equilateral of area/elements
+    block = fdem.jointed_rectangle(WIDTH, HEIGHT, size, origin=(0.0, GAP))
+    block = block.with_sets(element_sets={"rock": np.arange(block.n_elements)})
+    nx = max(4, round(1.4 * WIDTH / (4 * size)))
+    platen = fdem.Mesh.rectangle(1.4 * WIDTH, 4 * size, nx, 1, origin=(-0.2 * WIDTH, -4 * size))
+    platen = platen.with_sets(element_sets={"platen": np.arange(platen.n_elements)})
+    mesh = fdem.Mesh.combine(block, platen, prefixes=["block_", "platen_"])
+    rock = fdem.MohrCoulombRankine(E=30e9, nu=0.25, rho=2700.0, c=10e6, phi=35.0, psi=5.0, ft=5e6, Gf=30.0)
+    model = fdem.Model(mesh, materials={"block_rock": rock, "platen_platen": fdem.Elastic(E=30e9, nu=0.25, rho=2700.0)})
+    model.fix("platen_bottom").fix("platen_left").fix("platen_right")
+    model.set_initial_velocity((0.0, -SPEED), where=np.arange(block.n_nodes))  # the block's nodes come first
+    friction = math.degrees(math.atan(0.6))
+    model.contact(fdem.Interface(friction=friction, damping=0.5, penalty_factor=10.0)).fracture(check_every=5)
+    return model
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--elements", type=float, nargs="+", default=[1e4, 1e5])
+    ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--duration", type=float, default=4e-4, help="simulated time after first contact (s)")
+    args = ap.parse_args()
+    print(f"fdem {fdem.__version__}, {platform.machine()}, {os.cpu_count()} cores")
+    header = (
+        "elements",
+        "threads",
+        "steps",
+        "cracks",
+        "final el.",
+        "updates/s",
+        "insertion",
+        "checks",
+        "contact",
+        "elements%",
+    )
+    print(" ".join(f"{h:>10}" for h in header))
+    for target in args.elements:
+        model = build(target)
+        for threads in args.threads:
+            sim = fdem.Simulation(model, threads=threads, stiffness_damping=2e-7)
+            # fly to the platen (the gap closes at GAP / SPEED), then time the impact
+            sim.run(until=0.8 * GAP / SPEED, progress=False)
+            p0, s0 = sim.phase_times(), sim.steps
+            updates, wall = 0.0, 0.0
+            end = sim.time + args.duration
+            while sim.time < end:
+                n = sim.n_elements
+                w0 = time.perf_counter()
+                sim.step(20)
+                wall += time.perf_counter() - w0
+                updates += 20 * 0.5 * (n + sim.n_elements)
+            p1 = sim.phase_times()
+            share = {k: (p1[k] - p0[k]) / wall for k in p1}
+            print(
+                f"{model.mesh.n_elements:>10} {threads:>10} {sim.steps - s0:>10} {sim.insertions:>10} "
+                f"{sim.n_elements:>10} {updates / wall:>10.3e} {share['topology']:>10.1%} {share['fracture']:>10.1%} "
+                f"{share['surface']:>10.1%} {share['elements']:>10.1%}",
+                flush=True,
+            )
+
+
+if __name__ == "__main__":
+    main()
