@@ -23,9 +23,8 @@ import math  # noqa: E402
 import platform  # noqa: E402
 import time  # noqa: E402
 
-import numpy as np  # noqa: E402
-
 import fdem  # noqa: E402
+import numpy as np  # noqa: E402
 
 WIDTH, HEIGHT, GAP, SPEED = 1.0, 0.5, 1e-3, 10.0
 
