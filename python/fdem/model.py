@@ -141,6 +141,7 @@ class Model:
         self._initial_stress: NDArray[np.float64] | None = None
         self._contact: dict[str, Any] | None = None
         self._fracture: dict[str, Any] | None = None
+        self._stages: list[tuple[float, NDArray[np.int64]]] = []
 
     @staticmethod
     def _check_material(name: str, m: Any) -> None:
@@ -328,6 +329,25 @@ class Model:
         self._fracture = {"interval": int(check_every), "edge": e, "crack": c, "quality": q, "size": s, "insert_at": f}
         return self
 
+    # --- staging ----------------------------------------------------------
+    def excavate(self, where: str | Any, *, at: float) -> Model:
+        """Schedules an excavation stage (DESIGN §4.6): the elements of
+        ``where`` (an element-set name or element ids) are removed once the
+        simulated time reaches ``at`` (s). Their mass and forces leave their
+        nodes; nodes left without elements leave the model; the energy they
+        take away is booked as ``excavated``. Stages run in time order."""
+        t = number("at", at)
+        ids = self.mesh.elements(where)
+        if len(ids) == 0:
+            raise ValueError(f"excavation stage at {t} s has no elements")
+        self._stages.append((t, np.asarray(ids, dtype=np.int64)))
+        return self
+
+    @property
+    def stages(self) -> list[tuple[float, NDArray[np.int64]]]:
+        """The scheduled excavation stages ``(time, element ids)``."""
+        return list(self._stages)
+
     # --- initial state ----------------------------------------------------
     def set_initial_velocity(
         self, value: tuple[float, float] | Any | Callable[[Any, Any], Any], where: str | Any | None = None
@@ -341,6 +361,59 @@ class Model:
             self._initial_velocity = np.zeros((self.mesh.n_nodes, 2))
         self._initial_velocity[nodes] = v
         return self
+
+    def set_geostatic_stress(
+        self,
+        *,
+        top: float,
+        pressure: float = 0.0,
+        unit_weight: float | None = None,
+        k0: float | None = None,
+        where: str | Any | None = None,
+    ) -> Model:
+        """Geostatic initial stress (DESIGN §4.6, compression negative):
+        ``σ_yy = −(p_top + γ (top − y))``, ``σ_xx = K0 σ_yy``,
+        ``σ_zz = ν (σ_xx + σ_yy)``, ``σ_xy = 0`` at element centroids.
+
+        Parameters
+        ----------
+        top : float
+            Level of the top face (m), where the vertical stress is ``pressure``.
+        pressure : float
+            Vertical pressure on the top face (Pa, positive compressive).
+        unit_weight : float, optional
+            γ (N/m³); default ρ |g| of each element's material with the model's
+            gravity.
+        k0 : float, optional
+            Horizontal-to-vertical stress ratio; default ``ν / (1 − ν)`` of each
+            element's material (no lateral strain).
+        where : str or element ids, optional
+            Elements to set (default all).
+
+        With rollers on the sides this state is in equilibrium under gravity
+        and the top pressure; :meth:`fdem.Simulation.equilibrate` removes the
+        small imbalance of the discretisation and of closing joints.
+        """
+        y_top, p_top = number("top", top), number("pressure", pressure)
+        elems = np.arange(self.mesh.n_elements) if where is None else self.mesh.elements(where)
+        mats = [self._materials[i] for i in self._element_material[elems]]
+        nu = np.array([m.nu for m in mats])
+        g = float(np.hypot(*self.gravity))
+        if unit_weight is None:
+            gamma = np.array([m.rho for m in mats]) * g
+        else:
+            gamma = np.full(len(elems), number("unit_weight", unit_weight))
+        if k0 is None:
+            ratio = nu / (1 - nu)
+        else:
+            ratio = np.full(len(elems), number("k0", k0))
+            if np.any(ratio < 0):
+                raise ValueError(f"k0 = {k0} must be >= 0")
+        y = self.mesh.centroids()[elems, 1]
+        syy = -(p_top + gamma * (y_top - y))
+        sxx = ratio * syy
+        stress = np.column_stack([sxx, syy, nu * (sxx + syy), np.zeros(len(elems))])
+        return self.set_initial_stress(stress, where=elems if where is not None else None)
 
     def set_initial_stress(
         self, value: tuple[float, float, float, float] | Any | Callable[[Any, Any], Any], where: str | Any | None = None
@@ -444,6 +517,8 @@ class Model:
             "amplitudes": [(list(a.times), list(a.values)) for a in amps],
             "initial_velocity": self._initial_velocity,
             "initial_stress": self._initial_stress,
+            "stage_times": [t for t, _ in self._stages],
+            "stage_elements": [ids for _, ids in self._stages],
         }
         if cn:
             out.update(

@@ -236,6 +236,123 @@ class Simulation:
         self._core.step(int(n))
         return self
 
+    # --- staging ----------------------------------------------------------
+    def deactivate(self, where: str | Any) -> int:
+        """Removes elements now (an element-set name of the model's mesh or
+        element ids), as an excavation stage would; returns how many were
+        removed (already removed ones are skipped)."""
+        ids = self.model.mesh.elements(where) if isinstance(where, str) else np.asarray(where, dtype=np.int64)
+        return int(self._core.deactivate(np.ascontiguousarray(ids, dtype=np.int64)))
+
+    @property
+    def stages_done(self) -> int:
+        """Excavation stages (``Model.excavate``) run so far."""
+        return int(self._core.stages_done)
+
+    def equilibrate(
+        self,
+        *,
+        max_velocity: float = 1e-3,
+        damping: float | None = None,
+        max_time: float | None = None,
+        check_every: int = 50,
+        restart_clock: bool = True,
+        elastic: bool = True,
+        progress: bool = False,
+    ) -> dict[str, float]:
+        """A damped equilibrium stage (DESIGN §4.6): runs with mass damping
+        until the largest node speed is below ``max_velocity`` (m/s), then
+        restores the run's damping and, with ``restart_clock``, starts the
+        clock (and the energy account) again at t = 0, so that excavation
+        stages are timed from the equilibrium.
+
+        Parameters
+        ----------
+        damping : float, optional
+            Mass damping α (1/s) for the stage; default ``π c_p / H``, critical
+            for the fundamental mode of a column of height ``H`` (the mesh's
+            larger extent) and P-wave speed ``c_p`` of the stiffest material.
+        max_time : float, optional
+            Give up (``RuntimeError``) after this much simulated time; default
+            100 ``H / c_p``.
+        check_every : int
+            Steps between checks of the largest speed.
+        elastic : bool
+            Run the stage elastically: no plastic flow, softening or crack
+            insertion until it ends. The start from a geostatic stress is not
+            in equilibrium where joints and free faces meet the initial
+            stress, and its transient would otherwise crack the rock (with
+            f_t small against the in-situ stress) before any excavation.
+
+        Returns a dict with the stage's ``time`` (s), ``steps`` and final
+        ``max_velocity``.
+        """
+        tol = positive("max_velocity", max_velocity)
+        lo, hi = self.model.mesh.points.min(axis=0), self.model.mesh.points.max(axis=0)
+        height = float(max(hi - lo))
+        mats = self.model._materials
+        cp = max(np.sqrt((m.lame_lambda + 2 * m.shear_modulus) / m.rho) for m in mats)
+        alpha = np.pi * cp / height if damping is None else positive("damping", damping)
+        limit = 100 * height / cp if max_time is None else positive("max_time", max_time)
+        before = dict(self._settings)
+        self.configure(mass_damping=alpha)
+        self._core.set_elastic_stage(bool(elastic))
+        t0, s0 = self.time, self.steps
+        speed = np.inf
+        try:
+            while True:
+                self._core.step(int(check_every))
+                v = self._core.velocities()
+                speed = float(np.sqrt((v * v).sum(axis=1).max())) if len(v) else 0.0
+                if progress:
+                    print(f"equilibrium: t = {self.time - t0:.4f} s, max speed {speed:.2e} m/s", flush=True)
+                if speed < tol:
+                    break
+                if self.time - t0 > limit:
+                    raise RuntimeError(
+                        f"no equilibrium after {self.time - t0:.3g} s: largest speed {speed:.3g} m/s "
+                        f"> {tol:g} m/s (raise max_time or damping)"
+                    )
+        finally:
+            self._core.set_elastic_stage(False)
+            self._settings = before
+            self._core.set_settings(**self._settings)
+        result = {"time": self.time - t0, "steps": float(self.steps - s0), "max_velocity": speed}
+        if restart_clock:
+            self._core.restart_clock()
+        return result
+
+    def fragment_labels(self) -> NDArray[np.int64]:
+        """The fragment of every element: active elements that share a node
+        form one fragment, numbered from 0; excavated elements get -1."""
+        return self._core.fragment_labels()
+
+    def fragments(self) -> dict[str, NDArray[Any]]:
+        """Fragments (bodies) now: per fragment its ``area`` (m²), ``mass``
+        (kg per unit thickness), ``centroid`` (k, 2) and number of
+        ``elements``, largest first."""
+        labels = self.fragment_labels()
+        keep = labels >= 0
+        lab = labels[keep]
+        k = int(lab.max()) + 1 if len(lab) else 0
+        tri = self.triangles()[keep]
+        areas = self.areas()[keep]
+        rho = np.array([m.rho for m in self.model._materials])[self._core.element_materials()]
+        mass = areas * rho[keep]
+        c = self.positions()[tri].mean(axis=1)
+        area = np.bincount(lab, weights=areas, minlength=k)
+        m = np.bincount(lab, weights=mass, minlength=k)
+        cx = np.bincount(lab, weights=mass * c[:, 0], minlength=k) / np.maximum(m, 1e-300)
+        cy = np.bincount(lab, weights=mass * c[:, 1], minlength=k) / np.maximum(m, 1e-300)
+        count = np.bincount(lab, minlength=k)
+        order = np.argsort(-area, kind="stable")
+        return {
+            "area": area[order],
+            "mass": m[order],
+            "centroid": np.column_stack([cx, cy])[order],
+            "elements": count[order],
+        }
+
     def set_prescribed_velocity(self, nodes: Any, values: Any) -> None:
         """Changes the prescribed velocity (m/s) of nodes that already have one."""
         self._core.set_prescribed_velocity(

@@ -35,11 +35,23 @@ pub struct ContactState {
     pub facet: u32,
     /// Elastic tangential gap `g_tᵉ` (m), carried over to an adjacent facet.
     pub elastic_gap: f64,
+    /// Set when a topology change (a crack, an excavation) took away the
+    /// facet this node was pressing on, or created the node as a copy of
+    /// one that was: the direction `b − a` of that facet, along which
+    /// `elastic_gap` is measured. The next evaluation may then take up a
+    /// contact that is already penetrated (its spring energy was counted
+    /// before the change, so no energy appears), once; without this rule a
+    /// new contact must be entered through the facet's line (no energy pump
+    /// at corners) and every joint spring cut by a crack would vanish.
+    pub resumed_along: Option<Vec2>,
+    /// With `resumed_along`: the penetration (m, ≥ 0) it had; the resumed
+    /// contact may be no deeper (plus this step's approach).
+    pub resumed_depth: f64,
 }
 
 impl Default for ContactState {
     fn default() -> Self {
-        Self { facet: NONE, elastic_gap: 0.0 }
+        Self { facet: NONE, elastic_gap: 0.0, resumed_along: None, resumed_depth: 0.0 }
     }
 }
 
@@ -136,6 +148,31 @@ fn tributary(surface: &Surface, x: &[Vec2], b: usize, n: Vec2) -> f64 {
         .sum()
 }
 
+/// At a shallow convex corner of the surface (a turn of less than 30°), the
+/// signed gap (negative inside) of point `s` from the line of the facet
+/// that follows facet `f` past its end (`at_end`) or precedes it before its
+/// start; `None` at a concave or sharp corner (or without such a facet).
+/// Facets run with the body on their left, so a left turn is convex. Only
+/// shallow corners need this: there a contact slides on from one facet to
+/// the next without the entry check (rank 1 in `evaluate_node`); at a sharp
+/// corner the slack keeps two blocks' aligned corners in contact.
+#[inline]
+fn corner_gap(surface: &Surface, x: &[Vec2], f: u32, at_end: bool, s: Vec2) -> Option<f64> {
+    let [a, b] = surface.facets[f as usize].nodes;
+    let v = if at_end { b } else { a };
+    let bv = surface.index_of[v as usize];
+    let k = surface.node_facets.row(bv as usize).iter().copied().find(|&k| {
+        let [p, q] = surface.facets[k as usize].nodes;
+        k != f && if at_end { p == v } else { q == v }
+    })?;
+    let [p, q] = surface.facets[k as usize].nodes;
+    let (xa, xb, xp, xq) = (x[a as usize], x[b as usize], x[p as usize], x[q as usize]);
+    let (d, e) = ([xb[0] - xa[0], xb[1] - xa[1]], [xq[0] - xp[0], xq[1] - xp[1]]);
+    let turn = d[0] * e[1] - d[1] * e[0];
+    let smooth = d[0] * e[0] + d[1] * e[1] >= SMOOTH_COS * d[0].hypot(d[1]) * e[0].hypot(e[1]);
+    (turn > 0.0 && smooth).then(|| project(s, xp, xq).1)
+}
+
 /// Inputs of the narrow phase.
 pub struct NarrowInputs<'a> {
     /// Node positions `x^{n+1}` (m).
@@ -200,10 +237,36 @@ fn evaluate_node(inp: &NarrowInputs<'_>, b: usize, state: &mut ContactState, acc
         if !(-XI_SLACK..=1.0 + XI_SLACK).contains(&xi) || gap >= 0.0 || gap < -facet.depth {
             continue;
         }
+        // Past an end of the facet (the slack that lets a node slide over a
+        // vertex), at a convex corner of the other body, the facet's line
+        // runs outside that body: the depth is the lesser of the two
+        // facets' (the body is locally the intersection of their half
+        // planes), and a node outside the next facet's line is not in
+        // contact at all. Measured against the line alone, a node that has
+        // just left the next facet would start with a deep penetration and
+        // its spring energy would appear from nothing.
+        let gap = if (0.0..=1.0).contains(&xi) {
+            gap
+        } else {
+            match corner_gap(inp.surface, inp.x, f, xi > 1.0, s) {
+                Some(g) if g >= 0.0 => continue,
+                Some(g) => gap.max(g),
+                None => gap,
+            }
+        };
         let own = *own_normal.get_or_insert_with(|| node_normal(inp.surface, inp.x, b));
         if own[0] * n[0] + own[1] * n[1] > -FACING_COS {
             continue;
         }
+        // how far the node moved towards the facet this step
+        let approach = || {
+            let w = xi.clamp(0.0, 1.0);
+            let v = inp.v;
+            ((v[node][0] - (1.0 - w) * v[ia][0] - w * v[ib][0]) * n[0]
+                + (v[node][1] - (1.0 - w) * v[ia][1] - w * v[ib][1]) * n[1])
+                .abs()
+                * inp.dt
+        };
         let rank = if f == state.facet {
             0
         } else if state.facet != NONE && inp.surface.adjacent(state.facet, f) && {
@@ -214,14 +277,21 @@ fn evaluate_node(inp: &NarrowInputs<'_>, b: usize, state: &mut ContactState, acc
             (d[1] * n[0] - d[0] * n[1]) >= SMOOTH_COS * (d[0] * d[0] + d[1] * d[1]).sqrt()
         } {
             1
+        } else if let Some(d) = state.resumed_along {
+            // a resumed contact: no deeper than it was before the topology
+            // change, preferably on a facet parallel to its old one
+            if gap < -(state.resumed_depth + 2.0 * approach() + 1e-12 * len) {
+                continue;
+            }
+            let (a, b) = (inp.x[ia], inp.x[ib]);
+            let e = [b[0] - a[0], b[1] - a[1]];
+            if (d[0] * e[0] + d[1] * e[1]).abs() >= SMOOTH_COS * (d[0] * d[0] + d[1] * d[1]).sqrt() * len {
+                1
+            } else {
+                2
+            }
         } else {
-            let w = xi.clamp(0.0, 1.0);
-            let v = inp.v;
-            let approach = ((v[node][0] - (1.0 - w) * v[ia][0] - w * v[ib][0]) * n[0]
-                + (v[node][1] - (1.0 - w) * v[ia][1] - w * v[ib][1]) * n[1])
-                .abs()
-                * inp.dt;
-            if gap < -(2.0 * approach + 1e-12 * len) {
+            if gap < -(2.0 * approach() + 1e-12 * len) {
                 continue;
             }
             2
@@ -270,6 +340,12 @@ fn evaluate_node(inp: &NarrowInputs<'_>, b: usize, state: &mut ContactState, acc
         } else {
             -state.elastic_gap
         }
+    } else if let Some(d) = state.resumed_along {
+        if d[0] * t[0] + d[1] * t[1] >= 0.0 {
+            state.elastic_gap
+        } else {
+            -state.elastic_gap
+        }
     } else {
         0.0
     };
@@ -280,7 +356,7 @@ fn evaluate_node(inp: &NarrowInputs<'_>, b: usize, state: &mut ContactState, acc
     // (the normal forces need no such care: the passes share the load).
     let cohesion = 0.5 * law.cohesion * trib;
     let (ft, new_gap, work) = friction_update(law, alpha_t, elastic_gap, slip, normal_force, cohesion);
-    *state = ContactState { facet: f, elastic_gap: new_gap };
+    *state = ContactState { facet: f, elastic_gap: new_gap, ..Default::default() };
     acc.contacts += 1;
     acc.friction += work;
     acc.stored += 0.5 * alpha_n * gap * gap + 0.5 * alpha_t * new_gap * new_gap;
@@ -332,5 +408,59 @@ mod tests {
         assert_eq!(n, [0.0, -1.0]);
         assert_eq!(t, [1.0, 0.0]);
         assert!((gap + 0.1).abs() < 1e-15); // 0.1 inside the body
+    }
+
+    /// A node that has just left a facet next to a convex corner of the
+    /// other body lies inside the line of the facet before the corner
+    /// (within the slack past its end) but outside the body: no contact,
+    /// where the line alone would give it a 3 mm penetration out of nothing.
+    #[test]
+    fn no_contact_past_a_convex_corner() {
+        // master: thin triangle a(−1,0), b(0,0), c(1,0.3), counter-clockwise,
+        // convex at b; slave: triangle q, r, s with its apex s just below the
+        // facet b→c and 3 mm above the line of a→b.
+        let x: Vec<Vec2> = vec![[-1.0, 0.0], [0.0, 0.0], [1.0, 0.3], [-0.5, -1.0], [0.5, -1.0], [0.02, 0.003]];
+        let facets = [([0, 1], 0), ([1, 2], 0), ([2, 0], 0), ([3, 4], 0), ([4, 5], 0), ([5, 3], 0)];
+        let apex = [x[2], x[0], x[1], x[5], x[3], x[4]];
+        let surface = Surface::new(x.len(), &facets, &x, &apex);
+        let mut broad = crate::BroadPhase::new(0.5);
+        broad.build(&surface, &x);
+        let laws = [InterfaceLaw::new(1e9, 1e9, 0.5, 0.0, 0.0).unwrap()];
+        let v = vec![[0.0; 2]; x.len()];
+        let mass = vec![1.0; x.len()];
+        let inp = NarrowInputs {
+            x: &x,
+            v: &v,
+            mass: &mass,
+            surface: &surface,
+            candidates: &broad.candidates,
+            laws: &laws,
+            dt: 1e-4,
+        };
+        let node_s = surface.index_of[5] as usize;
+        let facet_bc = surface.facets.iter().position(|f| f.nodes == [1, 2]).unwrap() as u32;
+        let facet_ab = surface.facets.iter().position(|f| f.nodes == [0, 1]).unwrap() as u32;
+        // the line of a→b alone says: inside, past its end
+        let (xi, gap, ..) = project(x[5], x[0], x[1]);
+        assert!(xi > 1.0 && xi < 1.0 + XI_SLACK && gap < -0.002, "xi {xi}, gap {gap}");
+        assert!(broad.candidates.row(node_s).contains(&facet_ab));
+        let mut states = vec![ContactState::default(); surface.nodes.len()];
+        // it was touching b→c last step, so a→b would rank as its continuation
+        states[node_s] = ContactState { facet: facet_bc, ..Default::default() };
+        let mut out = vec![NodeContact { facet: NONE, ..Default::default() }; surface.nodes.len()];
+        let mut partials = vec![ContactPartial::default(); surface.nodes.len().div_ceil(CHUNK)];
+        evaluate(&inp, &mut states, &mut out, &mut partials);
+        assert_eq!(out[node_s].facet, NONE);
+        assert_eq!(out[node_s].normal_force, 0.0);
+        // 1 cm higher it is inside both lines: the depth is the lesser one
+        let mut x2 = x.clone();
+        x2[5] = [0.02, 0.013];
+        let inp = NarrowInputs { x: &x2, ..inp };
+        states[node_s] = ContactState { facet: facet_bc, ..Default::default() };
+        evaluate(&inp, &mut states, &mut out, &mut partials);
+        let depth_bc = project(x2[5], x[1], x[2]).1;
+        assert!(depth_bc < 0.0 && depth_bc > -0.013);
+        assert_eq!(out[node_s].facet, facet_bc);
+        assert!((out[node_s].gap - depth_bc).abs() < 1e-15);
     }
 }

@@ -16,8 +16,8 @@ use pyo3::types::PyDict;
 
 use fdem_solver::material_point::{material_point as drive_point, Path};
 use fdem_solver::{
-    Amplitude, Bond, Constraint, ContactSpec, CrackBand, FractureParams, FractureSpec, InterfaceSpec, LawSpec,
-    MaterialSpec, ModelSpec, PressureLoad, RunError, Settings,
+    Amplitude, Bond, Constraint, ContactSpec, CrackBand, ExcavationStage, FractureParams, FractureSpec, InterfaceSpec,
+    LawSpec, MaterialSpec, ModelSpec, PressureLoad, RunError, Settings,
 };
 
 /// Runs `f`, turning a panic into a `RuntimeError`.
@@ -173,6 +173,7 @@ impl PySimulation {
         amplitudes=Vec::new(), initial_velocity=None, initial_stress=None,
         contact_laws=None, contact_facets=None, contact_facet_laws=None, crack_law=0, contact_margin=None,
         fracture_interval=0, fracture_edge_tolerance=15.0, fracture_crack_tolerance=30.0, fracture_min_quality=0.2, fracture_min_altitude=0.0, fracture_insert_at=0.02,
+        stage_times=Vec::new(), stage_elements=Vec::new(),
         mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, threads=0
     ))]
     fn new(
@@ -203,6 +204,8 @@ impl PySimulation {
         fracture_min_quality: f64,
         fracture_min_altitude: f64,
         fracture_insert_at: f64,
+        stage_times: Vec<f64>,
+        stage_elements: Vec<PyReadonlyArray1<'_, i64>>,
         mass_damping: f64,
         stiffness_damping: f64,
         safety: f64,
@@ -326,6 +329,23 @@ impl PySimulation {
                     interval: fracture_interval,
                     insert_at: fracture_insert_at,
                 }),
+                stages: {
+                    if stage_times.len() != stage_elements.len() {
+                        return Err(value_error("stage_times and stage_elements must have the same length"));
+                    }
+                    let mut stages = Vec::with_capacity(stage_times.len());
+                    for (k, (&time, ids)) in stage_times.iter().zip(&stage_elements).enumerate() {
+                        let name = format!("excavation stage {k}");
+                        let elements = ids
+                            .as_array()
+                            .iter()
+                            .enumerate()
+                            .map(|(i, &e)| to_u32(&name, i, e))
+                            .collect::<PyResult<Vec<u32>>>()?;
+                        stages.push(ExcavationStage { time, elements });
+                    }
+                    stages
+                },
                 settings: Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval },
             };
             let sim = fdem_solver::Simulation::new(spec, threads).map_err(|e| value_error(e.to_string()))?;
@@ -377,6 +397,11 @@ impl PySimulation {
         Ok(())
     }
 
+    /// Switches the elastic (equilibrium) stage on or off.
+    fn set_elastic_stage(&mut self, on: bool) {
+        self.sim.set_elastic_stage(on);
+    }
+
     /// Replaces the run settings between stages.
     #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval))]
     fn set_settings(
@@ -392,6 +417,52 @@ impl PySimulation {
             let s = Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval };
             self.sim.set_settings(s).map_err(|e| value_error(e.to_string()))
         })
+    }
+
+    /// Removes elements now (excavation); returns how many were removed.
+    fn deactivate(&mut self, elements: PyReadonlyArray1<'_, i64>) -> PyResult<usize> {
+        guard(|| {
+            self.ok()?;
+            let ids: Vec<u32> = elements
+                .as_array()
+                .iter()
+                .enumerate()
+                .map(|(i, &e)| to_u32("elements", i, e))
+                .collect::<PyResult<_>>()?;
+            self.sim.deactivate(&ids).map_err(|e| value_error(e.to_string()))
+        })
+    }
+
+    /// The material index of every element (splits inherit their parent's).
+    fn element_materials<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        self.sim.element_materials().iter().map(|&m| i64::from(m)).collect::<Vec<_>>().into_pyarray(py)
+    }
+
+    /// Excavation stages run so far.
+    #[getter]
+    fn stages_done(&self) -> usize {
+        self.sim.stages().1
+    }
+
+    /// Restarts the clock at t = 0 from the current state (time, steps,
+    /// energy account; stages are timed from the new zero).
+    fn restart_clock(&mut self) -> PyResult<()> {
+        guard(|| {
+            self.ok()?;
+            self.sim.restart_clock();
+            Ok(())
+        })
+    }
+
+    /// Fragment of every element (active elements sharing a node belong to
+    /// one), numbered from 0 in order of first element; -1 for removed ones.
+    fn fragment_labels<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        self.sim
+            .fragment_labels()
+            .into_iter()
+            .map(|l| if l == u32::MAX { -1 } else { i64::from(l) })
+            .collect::<Vec<_>>()
+            .into_pyarray(py)
     }
 
     /// Changes the values of existing prescribed velocities (m/s).
@@ -639,6 +710,7 @@ impl PySimulation {
             d.set_item("contact_work", e.contact_work)?;
             d.set_item("remeshing", e.remeshing)?;
             d.set_item("cohesive_elastic", e.cohesive_elastic)?;
+            d.set_item("excavated", e.excavated)?;
             d.set_item("residual", e.residual())?;
             Ok(d)
         })

@@ -98,8 +98,13 @@ impl ContactModel {
     }
 
     /// Adapts to a new surface (after a topology change): friction memory
-    /// follows the nodes and facets that still exist.
-    pub fn adopt(&mut self, old: Option<&Surface>, new: &Surface) {
+    /// follows the nodes and facets that still exist. A node that was
+    /// pressing on a facet that has changed, or a node created in this
+    /// change whose origin (`origins`: new node → the old node it came
+    /// from) was, resumes its contact at the next evaluation with the
+    /// penetration it has (see [`ContactState::resumed_along`]); `x` are the
+    /// current positions.
+    pub fn adopt(&mut self, old: Option<&Surface>, new: &Surface, x: &[Vec2], origins: &[(u32, u32)]) {
         if self.margin.is_none() {
             let mean = new.facets.iter().map(|f| f.length).sum::<f64>() / new.facets.len().max(1) as f64;
             self.broad.margin = 0.2 * mean;
@@ -113,20 +118,41 @@ impl ContactModel {
             for (k, f) in new.facets.iter().enumerate() {
                 facet_of_key[f.key as usize] = k as u32;
             }
-            for (b, &node) in new.nodes.iter().enumerate() {
+            let old_state = |node: u32| -> Option<(ContactState, f64)> {
                 let ob = old.index_of.get(node as usize).copied().unwrap_or(NONE);
                 if ob == NONE || ob as usize >= self.states.len() {
-                    continue;
+                    return None;
                 }
                 let s = self.states[ob as usize];
-                if s.facet == NONE {
-                    continue;
+                let depth = self.out.get(ob as usize).map_or(0.0, |c| (-c.gap).max(0.0));
+                (s.facet != NONE).then_some((s, depth))
+            };
+            let resumed = |(s, depth): (ContactState, f64)| -> ContactState {
+                let [a, b] = old.facets[s.facet as usize].nodes;
+                let (pa, pb) = (x[a as usize], x[b as usize]);
+                ContactState {
+                    facet: NONE,
+                    elastic_gap: s.elastic_gap,
+                    resumed_along: Some([pb[0] - pa[0], pb[1] - pa[1]]),
+                    resumed_depth: depth,
                 }
+            };
+            for (b, &node) in new.nodes.iter().enumerate() {
+                let Some((s, depth)) = old_state(node) else {
+                    // a node created by this change inherits its origin's contact
+                    let origin = origins.binary_search_by_key(&node, |&(n, _)| n).ok().map(|i| origins[i].1);
+                    if let Some(s) = origin.and_then(&old_state) {
+                        states[b] = resumed(s);
+                    }
+                    continue;
+                };
                 let of = &old.facets[s.facet as usize];
                 let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
-                if f != NONE && new.facets[f as usize].nodes == of.nodes {
-                    states[b] = ContactState { facet: f, elastic_gap: s.elastic_gap };
-                }
+                states[b] = if f != NONE && new.facets[f as usize].nodes == of.nodes {
+                    ContactState { facet: f, elastic_gap: s.elastic_gap, ..Default::default() }
+                } else {
+                    resumed((s, depth))
+                };
             }
         }
         self.states = states;

@@ -43,6 +43,10 @@ pub struct Energies {
     /// with interpolated velocities; ≥ 0, second order in the velocity
     /// differences across the split edges).
     pub remeshing: f64,
+    /// Taken out of the model by excavation: the elastic energy of the
+    /// removed elements, the kinetic energy of the mass that left with them,
+    /// and the elastic energy of bonds to nodes that left.
+    pub excavated: f64,
     /// Work done on the nodes by contact and bond forces (a diagnostic:
     /// ideally `−(contact_elastic + friction + contact_damping +
     /// cohesive_elastic + bond dissipation)`).
@@ -61,9 +65,9 @@ impl Energies {
         supplied - self.kinetic - self.elastic - self.dissipated()
     }
 
-    /// Everything dissipated or held outside the elements so far: damping,
-    /// plastic flow, fracture, friction, contact damping, and the energy
-    /// in the contact springs.
+    /// Everything dissipated, held outside the elements, or taken out so
+    /// far: damping, plastic flow, fracture, friction, contact damping, the
+    /// energy in contact springs and bonds, remeshing losses, excavation.
     pub fn dissipated(&self) -> f64 {
         self.mass_damping
             + self.viscous_damping
@@ -74,6 +78,7 @@ impl Energies {
             + self.contact_elastic
             + self.cohesive_elastic
             + self.remeshing
+            + self.excavated
     }
 }
 

@@ -360,8 +360,22 @@ impl Simulation {
             s.nodes.mass.iter().zip(&s.nodes.v).map(|(m, v)| 0.5 * m * (v[0] * v[0] + v[1] * v[1])).sum()
         };
         let before = kinetic(self);
+        // each new node with the old node it came from (for contact memory)
+        let n0 = self.nodes.x.len() as u32;
+        let mut origins: Vec<(u32, u32)> = Vec::with_capacity(edits.new_nodes.len());
         for nn in &edits.new_nodes {
             let id = self.nodes.x.len() as u32;
+            let from = match *nn {
+                NewNode::Copy { of } => of,
+                NewNode::OnEdge { a, b, t } => {
+                    if t < 0.5 {
+                        a
+                    } else {
+                        b
+                    }
+                }
+            };
+            origins.push((id, if from >= n0 { origins[(from - n0) as usize].1 } else { from }));
             match *nn {
                 NewNode::Copy { of } => {
                     let o = of as usize;
@@ -451,7 +465,7 @@ impl Simulation {
                 c.facet_laws.insert(ancestor_pair(anc, p, w), c.crack_law);
             }
         }
-        self.rebuild_structure();
+        self.rebuild_structure(&origins);
         self.energies.remeshing += before - kinetic(self);
     }
 

@@ -20,6 +20,7 @@
 mod contact;
 mod energy;
 mod error;
+mod excavation;
 mod fracture;
 mod loads;
 pub mod material_point;
@@ -44,7 +45,9 @@ pub mod mesh {
     pub use fdem_mesh::split::split_along_edges;
 }
 pub use loads::{Amplitude, Constraint, PressureLoad};
-pub use model::{ContactSpec, FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Settings};
+pub use model::{
+    ContactSpec, ExcavationStage, FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Settings,
+};
 pub use simulation::{ContactInfo, ContactStats, PhaseTimes, Simulation};
 
 /// Nodes or elements per parallel work item. Fixed, so that partial sums

@@ -91,8 +91,20 @@ pub struct ModelSpec {
     pub contact: Option<ContactSpec>,
     /// Crack insertion, if enabled (needs contact).
     pub fracture: Option<FractureSpec>,
+    /// Excavation stages: element groups deactivated at given times.
+    pub stages: Vec<ExcavationStage>,
     /// Run settings.
     pub settings: Settings,
+}
+
+/// One excavation stage (DESIGN §4.6): the elements removed once the
+/// simulated time reaches `time`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExcavationStage {
+    /// Simulated time (s) at which the stage is excavated.
+    pub time: f64,
+    /// The elements removed (ids; already removed ones are skipped).
+    pub elements: Vec<u32>,
 }
 
 /// Crack insertion (paper 2.4, DESIGN §4.4, docs/fracture.md).

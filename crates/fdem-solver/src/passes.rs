@@ -159,6 +159,8 @@ pub(crate) struct ElementInputs<'a> {
     pub beta: f64,
     /// The step just taken, `Δt^{n+½}` (s); zero to only recompute forces.
     pub dt: f64,
+    /// Whether plastic laws apply; off in an elastic (equilibrium) stage.
+    pub plastic: bool,
 }
 
 #[inline(always)]
@@ -215,7 +217,7 @@ pub(crate) fn element_pass(
                     let old = sc[j];
                     let mut new = mat.elastic.trial(old, dh, inp.dt);
                     let half_area = 0.5 * frames.twice_area_mid[l];
-                    if let Some(law) = &mat.plastic {
+                    if let (true, Some(law)) = (inp.plastic, &mat.plastic) {
                         let u = law.update(old, new, &mut stc[j], || reference_geometry(&inp.reference[e]));
                         new = u.stress;
                         acc.plastic += half_area * u.plastic_dissipation;

@@ -68,7 +68,13 @@ impl Simulation {
         &self.nodes.mass
     }
 
-    /// Whether each element is active.
+    /// The material index of every element (pieces of a split element
+    /// keep their parent's).
+    pub fn element_materials(&self) -> &[u32] {
+        &self.elems.material
+    }
+
+    /// Whether each element is in the model (not excavated).
     pub fn active(&self) -> &[bool] {
         &self.elems.active
     }
@@ -105,6 +111,34 @@ impl Simulation {
                 v
             })
             .collect()
+    }
+
+    /// Resets the half-step velocities so that the whole-step velocities
+    /// are `v_n` under the current forces: `v^{n−½} = (1 + αh) vⁿ − h f/m`,
+    /// the central-difference start from a known state. Used after an
+    /// instantaneous change of the forces at `tⁿ` (an excavation), which
+    /// cannot change the velocities of the nodes that stay. Nodes without
+    /// mass and prescribed components are left alone.
+    pub(crate) fn keep_whole_step_velocities(&mut self, v_n: &[Vec2]) {
+        let h = 0.5 * self.dt_prev;
+        if h == 0.0 {
+            return;
+        }
+        let denom = 1.0 + self.settings.mass_damping * h;
+        for (i, vn) in v_n.iter().enumerate() {
+            let m = self.nodes.mass[i];
+            if m <= 0.0 {
+                continue;
+            }
+            let f = self.net_force(i);
+            let b = self.nodes.bc[i];
+            for d in 0..2 {
+                if b != NO_BC && self.constraints[b as usize].fixed[d] {
+                    continue;
+                }
+                self.nodes.v[i][d] = vn[d] * denom - h * f[d] / m;
+            }
+        }
     }
 
     /// Net force on node `i` at the current configuration (N).

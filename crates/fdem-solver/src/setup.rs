@@ -195,6 +195,16 @@ impl Simulation {
                 Some(crate::fracture::FractureModel::new(params, interval, insert_at))
             }
         };
+        let mut stages = spec.stages.clone();
+        for (k, st) in stages.iter().enumerate() {
+            if !st.time.is_finite() {
+                return invalid(format!("excavation stage {k}: time {} is not finite", st.time));
+            }
+            if let Some(&e) = st.elements.iter().find(|&&e| e as usize >= m) {
+                return invalid(format!("excavation stage {k}: element {e} does not exist (the model has {m})"));
+            }
+        }
+        stages.sort_by(|a, b| a.time.total_cmp(&b.time));
         let active = vec![true; m];
         let ancestor: Vec<u32> = (0..n as u32).collect();
         let incidence = node_elements(n, &conn);
@@ -203,7 +213,7 @@ impl Simulation {
         });
         let pressure = resolve_pressures(&surface, &spec.pressures, &ancestor, true).map_err(SetupError::Invalid)?;
         if let Some(c) = &mut contact {
-            c.adopt(None, &surface);
+            c.adopt(None, &surface, &[], &[]);
         }
 
         let mut v = vec![[0.0; 2]; n];
@@ -258,6 +268,9 @@ impl Simulation {
             surface,
             contact,
             fracture,
+            stages,
+            next_stage: 0,
+            elastic_stage: false,
             contact_stats: ContactStats::default(),
             phase_times: PhaseTimes::default(),
             omega: vec![0.0; m],

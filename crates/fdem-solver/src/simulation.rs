@@ -129,6 +129,11 @@ pub struct Simulation {
     pub(crate) contact_damping_force: Vec<Vec2>,
     pub(crate) contact: Option<ContactModel>,
     pub(crate) fracture: Option<crate::fracture::FractureModel>,
+    /// Excavation stages in time order, and the next one to run.
+    pub(crate) stages: Vec<crate::ExcavationStage>,
+    pub(crate) next_stage: usize,
+    /// Elastic stage: plastic laws and crack insertion off (equilibrium).
+    pub(crate) elastic_stage: bool,
     pub(crate) contact_stats: ContactStats,
     pub(crate) phase_times: PhaseTimes,
     /// Highest frequency of every element at the last stable-step update.
@@ -190,6 +195,7 @@ impl Simulation {
             materials: &self.materials,
             beta: 0.0,
             dt: 0.0,
+            plastic: !self.elastic_stage,
         };
         passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, elem_partials);
         self.surface_forces(0.0);
@@ -210,6 +216,7 @@ impl Simulation {
             materials: &self.materials,
             beta: 0.0,
             dt: 0.0,
+            plastic: !self.elastic_stage,
         };
         passes::element_forces_of(&inp, touched, &elems.stress, &mut elems.force);
         self.surface_forces(0.0);
@@ -275,6 +282,7 @@ impl Simulation {
                 materials: &self.materials,
                 beta: self.settings.stiffness_damping,
                 dt: 0.0,
+                plastic: !self.elastic_stage,
             };
             let mut crit = match touched {
                 None => passes::element_frequencies(&inp, omega),
@@ -340,6 +348,12 @@ impl Simulation {
 
     /// Advances one step.
     fn step_once(&mut self) -> Result<(), RunError> {
+        if !self.elastic_stage && self.next_stage < self.stages.len() && self.stages[self.next_stage].time <= self.time
+        {
+            let clock = Instant::now();
+            self.excavate_due();
+            self.phase_times.topology += clock.elapsed().as_secs_f64();
+        }
         let dt = self.dt;
         let dt_avg = 0.5 * (self.dt_prev + dt);
         self.eval_amplitudes(self.time + 0.5 * dt);
@@ -394,6 +408,7 @@ impl Simulation {
                 materials: &self.materials,
                 beta: self.settings.stiffness_damping,
                 dt,
+                plastic: !self.elastic_stage,
             };
             passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, elem_partials);
         }
@@ -409,7 +424,7 @@ impl Simulation {
         if let Some(element) = bad_element {
             return Err(RunError::InvertedElement { element, step: self.step, time: self.time });
         }
-        if self.fracture.as_ref().is_some_and(|f| self.step % f.interval as u64 == 0) {
+        if !self.elastic_stage && self.fracture.as_ref().is_some_and(|f| self.step % f.interval as u64 == 0) {
             let clock = Instant::now();
             let topology = self.phase_times.topology;
             // a change of topology rebuilds forces (and contact) itself
@@ -451,6 +466,20 @@ impl Simulation {
             }
             Ok(taken)
         })
+    }
+
+    /// Switches an elastic stage on or off: while on, every material
+    /// responds elastically (no plastic flow, softening or damage growth)
+    /// and no cracks are inserted or excavation stages run. Used for the
+    /// equilibrium stage from a geostatic stress (DESIGN §4.6), whose
+    /// transient would otherwise fracture the rock before it is loaded.
+    pub fn set_elastic_stage(&mut self, on: bool) {
+        self.elastic_stage = on;
+    }
+
+    /// Whether an elastic stage is on (see [`Self::set_elastic_stage`]).
+    pub fn elastic_stage(&self) -> bool {
+        self.elastic_stage
     }
 
     /// Replaces the run settings (damping, safety, fixed step) between stages.

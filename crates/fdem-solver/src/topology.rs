@@ -123,19 +123,12 @@ pub(crate) fn active_node_elements(n_nodes: usize, conn: &[[u32; 3]], active: &[
 
 impl crate::simulation::Simulation {
     /// Rebuilds everything derived from the connectivity after a topology
-    /// change: node→element lists, lumped masses, the free surfaces (facet
-    /// laws by ancestor pairs), pressure facets, contact buffers and
-    /// friction memory, per-chunk buffers, forces and the stable step.
-    #[allow(dead_code)] // for staged excavation (issue 6)
-    pub(crate) fn rebuild_topology(&mut self) {
-        self.rebuild_structure();
-        self.refresh_forces();
-        self.update_time_step();
-    }
-
-    /// The part of [`Self::rebuild_topology`] that does not evaluate forces:
-    /// adjacency, masses, surface, loads, contact state and buffers.
-    pub(crate) fn rebuild_structure(&mut self) {
+    /// change except forces and the stable step: node→element lists, lumped
+    /// masses, the free surfaces (facet laws by ancestor pairs), pressure
+    /// facets, contact buffers and friction memory, per-chunk buffers.
+    /// `origins` lists the nodes this change created, ascending, each with
+    /// the old node it came from: their contacts carry on.
+    pub(crate) fn rebuild_structure(&mut self, origins: &[(u32, u32)]) {
         let n = self.nodes.x.len();
         let m = self.elems.conn.len();
         self.node_elems = active_node_elements(n, &self.elems.conn, &self.elems.active);
@@ -168,7 +161,7 @@ impl crate::simulation::Simulation {
         self.pressure_force.clear();
         self.pressure_force.resize(nb, [0.0; 2]);
         if let Some(c) = &mut self.contact {
-            c.adopt(Some(&self.surface), &surface);
+            c.adopt(Some(&self.surface), &surface, &self.nodes.x, origins);
             self.contact_force.clear();
             self.contact_force.resize(nb, [0.0; 2]);
             self.contact_damping_force.clear();

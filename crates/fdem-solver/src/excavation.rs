@@ -1,0 +1,163 @@
+//! Staged excavation, the clock reset after an equilibrium stage, and
+//! fragments (DESIGN §4.6, issue 6).
+//!
+//! Removing elements takes their mass and forces off their nodes; a node
+//! left without elements leaves the model (zero mass: the node pass skips
+//! it, it is on no surface, its bonds go). What the removal takes away, the
+//! elements' elastic energy, the kinetic energy of the mass that left and
+//! the elastic energy of dropped bonds, is booked as `excavated`, so the
+//! energy account still closes.
+
+use crate::error::SetupError;
+use crate::simulation::Simulation;
+use crate::{Energies, ExcavationStage};
+
+impl Simulation {
+    /// Removes `elements` from the model now (ids; ones already removed are
+    /// skipped) and returns how many were removed. Errors name the first id
+    /// out of range; nothing is changed then.
+    pub fn deactivate(&mut self, elements: &[u32]) -> Result<usize, SetupError> {
+        let m = self.elems.conn.len();
+        if let Some(&e) = elements.iter().find(|&&e| e as usize >= m) {
+            return Err(SetupError::Invalid(format!("element {e} does not exist (the model has {m})")));
+        }
+        let remove: Vec<usize> = {
+            let mut r: Vec<usize> = elements.iter().map(|&e| e as usize).filter(|&e| self.elems.active[e]).collect();
+            r.sort_unstable();
+            r.dedup();
+            r
+        };
+        if remove.is_empty() {
+            return Ok(0);
+        }
+        // Removal happens at the whole step t_n. The work done up to t_n is
+        // what it was, so the reported work terms (whose pending half-step
+        // parts depend on the nodal masses and forces) are kept continuous;
+        // the stored and kinetic energy the removal takes away is booked
+        // as excavated: the removed elements' strain energy, the kinetic
+        // energy of the mass that left, dropped bonds and contacts. The
+        // nodes that stay keep their whole-step velocities.
+        let before = self.energies();
+        let v_n = self.velocities();
+        for &e in &remove {
+            self.elems.active[e] = false;
+        }
+        self.rebuild_structure(&[]);
+        for (v, &m) in self.nodes.v.iter_mut().zip(&self.nodes.mass) {
+            if m <= 0.0 {
+                *v = [0.0; 2];
+            }
+        }
+        if let Some(fr) = &mut self.fracture {
+            let mass = &self.nodes.mass;
+            fr.bonds.retain(|b| b.nodes.iter().all(|&n| mass[n as usize] > 0.0));
+        }
+        self.refresh_forces();
+        self.keep_whole_step_velocities(&v_n);
+        self.update_time_step();
+        let after = self.energies();
+        let held = |e: &Energies| e.kinetic + e.elastic + e.contact_elastic + e.cohesive_elastic;
+        let acc = &mut self.energies;
+        acc.external_work += before.external_work - after.external_work;
+        acc.support_work += before.support_work - after.support_work;
+        acc.mass_damping += before.mass_damping - after.mass_damping;
+        acc.contact_work += before.contact_work - after.contact_work;
+        acc.contact_damping += before.contact_damping - after.contact_damping;
+        acc.excavated += held(&before) - held(&after);
+        Ok(remove.len())
+    }
+
+    /// Runs the stages that are due at the current time; returns whether
+    /// any ran.
+    pub(crate) fn excavate_due(&mut self) -> bool {
+        let mut ran = false;
+        while self.next_stage < self.stages.len() && self.stages[self.next_stage].time <= self.time {
+            let stage = std::mem::take(&mut self.stages[self.next_stage].elements);
+            // ids were checked at set-up
+            let _ = self.deactivate(&stage);
+            self.stages[self.next_stage].elements = stage;
+            self.next_stage += 1;
+            ran = true;
+        }
+        ran
+    }
+
+    /// The excavation stages, and how many have run.
+    pub fn stages(&self) -> (&[ExcavationStage], usize) {
+        (&self.stages, self.next_stage)
+    }
+
+    /// Starts the clock again at `t = 0` from the current state (after an
+    /// equilibrium stage): time and step count are reset, and the energy
+    /// account starts afresh with the current kinetic and stored energy as
+    /// its initial values (its residual is zero right after). Excavation
+    /// stages are timed from the new zero.
+    pub fn restart_clock(&mut self) {
+        let e = self.energies();
+        let pending = |reported: f64, accumulated: f64| accumulated - reported;
+        let old = self.energies;
+        self.energies = Energies {
+            kinetic_initial: e.kinetic,
+            elastic_initial: e.elastic + e.contact_elastic + e.cohesive_elastic,
+            // the work still pending at this whole step is booked against
+            // the new start, so that the reported terms start at zero
+            external_work: pending(e.external_work, old.external_work),
+            support_work: pending(e.support_work, old.support_work),
+            mass_damping: pending(e.mass_damping, old.mass_damping),
+            contact_work: pending(e.contact_work, old.contact_work),
+            contact_damping: pending(e.contact_damping, old.contact_damping),
+            contact_elastic: old.contact_elastic,
+            cohesive_elastic: old.cohesive_elastic,
+            ..Energies::default()
+        };
+        self.time = 0.0;
+        self.step = 0;
+        self.next_stage = 0;
+        while self.next_stage < self.stages.len() && self.stages[self.next_stage].time < 0.0 {
+            self.next_stage += 1;
+        }
+    }
+
+    /// For every element the fragment (body) it belongs to: active elements
+    /// that share a node are in the same fragment; fragments are numbered
+    /// 0, 1, … in order of their smallest element id; removed elements get
+    /// `u32::MAX`. Linear in the element count.
+    pub fn fragment_labels(&self) -> Vec<u32> {
+        let n = self.nodes.x.len();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(parent: &mut [u32], mut i: u32) -> u32 {
+            while parent[i as usize] != i {
+                let g = parent[parent[i as usize] as usize];
+                parent[i as usize] = g;
+                i = g;
+            }
+            i
+        }
+        for (e, t) in self.elems.conn.iter().enumerate() {
+            if !self.elems.active[e] {
+                continue;
+            }
+            for k in 1..3 {
+                let (a, b) = (find(&mut parent, t[0]), find(&mut parent, t[k]));
+                if a != b {
+                    parent[a.max(b) as usize] = a.min(b);
+                }
+            }
+        }
+        let mut label_of_root = vec![u32::MAX; n];
+        let mut next = 0u32;
+        let mut labels = vec![u32::MAX; self.elems.conn.len()];
+        for (e, t) in self.elems.conn.iter().enumerate() {
+            if !self.elems.active[e] {
+                continue;
+            }
+            let r = find(&mut parent, t[0]) as usize;
+            if label_of_root[r] == u32::MAX {
+                label_of_root[r] = next;
+                next += 1;
+            }
+            labels[e] = label_of_root[r];
+        }
+        labels
+    }
+}
