@@ -290,8 +290,7 @@ class Simulation:
         tol = positive("max_velocity", max_velocity)
         lo, hi = self.model.mesh.points.min(axis=0), self.model.mesh.points.max(axis=0)
         height = float(max(hi - lo))
-        mats = self.model._materials
-        cp = max(np.sqrt((m.lame_lambda + 2 * m.shear_modulus) / m.rho) for m in mats)
+        cp = max(m.p_wave_speed for m in self.model._materials)
         alpha = np.pi * cp / height if damping is None else positive("damping", damping)
         limit = 100 * height / cp if max_time is None else positive("max_time", max_time)
         before = dict(self._settings)
