@@ -709,6 +709,7 @@ impl PySimulation {
             d.set_item("contact_elastic", e.contact_elastic)?;
             d.set_item("contact_work", e.contact_work)?;
             d.set_item("remeshing", e.remeshing)?;
+            d.set_item("resurfacing", e.resurfacing)?;
             d.set_item("cohesive_elastic", e.cohesive_elastic)?;
             d.set_item("excavated", e.excavated)?;
             d.set_item("residual", e.residual())?;

@@ -134,7 +134,7 @@ impl ContactModel {
                     facet: NONE,
                     elastic_gap: s.elastic_gap,
                     resumed_along: Some([pb[0] - pa[0], pb[1] - pa[1]]),
-                    resumed_depth: depth,
+                    depth,
                 }
             };
             for (b, &node) in new.nodes.iter().enumerate() {
@@ -149,7 +149,7 @@ impl ContactModel {
                 let of = &old.facets[s.facet as usize];
                 let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
                 states[b] = if f != NONE && new.facets[f as usize].nodes == of.nodes {
-                    ContactState { facet: f, elastic_gap: s.elastic_gap, ..Default::default() }
+                    ContactState { facet: f, elastic_gap: s.elastic_gap, resumed_along: None, depth }
                 } else {
                     resumed((s, depth))
                 };

@@ -43,6 +43,14 @@ pub struct Energies {
     /// with interpolated velocities; ≥ 0, second order in the velocity
     /// differences across the split edges).
     pub remeshing: f64,
+    /// Energy held in contact springs and cohesive bonds that crack
+    /// insertions released (positive) or created (negative) by re-forming
+    /// the contacts on the new surfaces at unchanged positions: a node's
+    /// tributary length changes with its facets, a contact at a facet that
+    /// no longer exists is resumed or dropped. Measured at each insertion as
+    /// the held energy after the re-evaluation minus before, so that it is
+    /// kept apart from the dynamics' balance (docs/caving.md).
+    pub resurfacing: f64,
     /// Taken out of the model by excavation: the elastic energy of the
     /// removed elements, the kinetic energy of the mass that left with them,
     /// and the elastic energy of bonds to nodes that left.
@@ -67,7 +75,8 @@ impl Energies {
 
     /// Everything dissipated, held outside the elements, or taken out so
     /// far: damping, plastic flow, fracture, friction, contact damping, the
-    /// energy in contact springs and bonds, remeshing losses, excavation.
+    /// energy in contact springs and bonds, remeshing losses, energy held in
+    /// contacts released by re-forming them at insertions, excavation.
     pub fn dissipated(&self) -> f64 {
         self.mass_damping
             + self.viscous_damping
@@ -78,6 +87,7 @@ impl Energies {
             + self.contact_elastic
             + self.cohesive_elastic
             + self.remeshing
+            + self.resurfacing
             + self.excavated
     }
 }

@@ -186,6 +186,8 @@ impl Simulation {
         let clock = std::time::Instant::now();
         let inner = (self.phase_times.surface, self.phase_times.broad_phase, self.phase_times.time_step);
         let before = self.mass_and_momentum();
+        let held = |e: &crate::energy::Energies| e.contact_elastic + e.cohesive_elastic;
+        let held_before = held(&self.energies);
         self.apply_edits(&edits);
         let after = self.mass_and_momentum();
         let stiffness = self.contact.as_ref().map_or(0.0, |c| c.crack_stiffness());
@@ -252,6 +254,7 @@ impl Simulation {
         touched.sort_unstable();
         touched.dedup();
         self.refresh_forces_of(&touched);
+        self.energies.resurfacing += held_before - held(&self.energies);
         self.update_time_step_for(Some(&touched));
         // the rebuild's surface forces and stable step count as topology
         let pt = &mut self.phase_times;
