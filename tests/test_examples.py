@@ -29,14 +29,6 @@ def test_lithostatic_example(tmp_path):
     assert (tmp_path / "lithostatic.png").stat().st_size > 10_000
 
 
-def test_demo_writes_results_and_picture(tmp_path):
-    from fdem.demos import run_demo
-
-    sim = run_demo(tmp_path, quick=True, progress=False)
-    assert (tmp_path / "demo.pvd").exists() and (tmp_path / "demo.png").stat().st_size > 10_000
-    assert abs(sim.velocities()).max() < 1e-3
-
-
 @pytest.mark.parametrize("confinement", [0.0, 2e6, 5e6, 10e6])
 def test_virtual_laboratory_compression(confinement):
     """Plateau σ_axial = N_φ σ_conf + UCS within 1%, dilation ratio N_ψ

@@ -95,9 +95,10 @@ class CavingCase:
 
     @staticmethod
     def quick() -> CavingCase:
-        """A coarse version (joint spacings ×3, 2.5 m elements) that runs in
-        well under a minute on 2 cores: for tests and the demo."""
-        return CavingCase(size=2.5, joint_scale=3.0, support=5.0, until=2.0, interval=0.12, output_every=0.25)
+        """A coarse, fast version for tests and the demo: 4 m elements, joint
+        spacings ×4, the undercut advanced every 0.06 s, run to 0.8 s
+        (about 50 s on 2 cores, 4 872 elements at the start)."""
+        return CavingCase(size=4.0, joint_scale=4.0, support=5.0, until=0.8, interval=0.06, output_every=0.2)
 
 
 def caving_model(case: CavingCase | None = None) -> Model:
@@ -311,7 +312,9 @@ def run_caving(
     e = sim.energies()
     x = sim.positions()
     caved = sim.active() & (x[sim.triangles()].mean(axis=1)[:, 1] < BOTTOM)
-    changes = sum(abs(v) for k, v in e.items() if k not in ("residual", "kinetic_initial", "elastic_initial"))
+    # what the balance is measured against: the energy put in since
+    # equilibrium (work of gravity, the top pressure and the supports)
+    supplied = abs(e["external_work"]) + abs(e["support_work"]) + e["kinetic_initial"] + e["elastic_initial"]
     summary = {
         "elements_initial": n0,
         "elements_final": sim.n_elements,
@@ -326,7 +329,7 @@ def run_caving(
         "largest_fragment_m2": float(frags["area"][0]) if len(frags["area"]) else 0.0,
         "caved_area_m2": float(sim.areas()[caved].sum()),
         "energy_residual_J": e["residual"],
-        "energy_changes_J": changes,
+        "energy_supplied_J": supplied,
         **rest,
     }
     lines = [f"{k}: {v:.6g}" if isinstance(v, float) else f"{k}: {v}" for k, v in summary.items()]
