@@ -122,8 +122,9 @@ def test_jointed_block_at_rest_stays_at_rest_when_plasticity_and_fracture_start(
     over 0.04 s (before the first undercut stage), 2.5 m elements and joint
     spacings ×3: 19 cracks, largest speed 0.92 m/s, residual 0.58% of the
     joint springs' energy (2026-11-22); after the contact fixes of
-    2026-11-23 (docs/caving.md) 9 cracks, 0.04 m/s, residual 0.0085%. Checked: fewer than 100 cracks, largest speed below
-    1 m/s, residual within 1%."""
+    2026-11-23 (docs/caving.md) 9 cracks, 0.04 m/s, residual 0.0085%.
+    Checked: fewer than 100 cracks, largest speed below 1 m/s, residual
+    within 1%."""
     case = CavingCase(size=2.5, joint_scale=3.0, support=5.0)
     sim = fdem.Simulation(caving_model(case), stiffness_damping=2e-6)
     sim.equilibrate(max_velocity=1e-3, progress=False)

@@ -350,24 +350,17 @@ fn evaluate_node(inp: &NarrowInputs<'_>, b: usize, state: &mut ContactState, acc
     let normal_force = (spring - dashpot * gap_rate).max(0.0);
     // the dashpot's actual share of the normal force, after the no-pull clamp
     let fd = normal_force - spring;
-    // carry the elastic tangential gap over to a neighbouring facet
+    // carry the elastic tangential gap, measured along the old facet's
+    // direction `d`, over to a neighbouring facet or a resumed contact
+    let carried = |d: Vec2| if d[0] * t[0] + d[1] * t[1] >= 0.0 { state.elastic_gap } else { -state.elastic_gap };
     let elastic_gap = if state.facet == f {
         state.elastic_gap
     } else if state.facet != NONE && inp.surface.adjacent(state.facet, f) && continues {
         let prev = &inp.surface.facets[state.facet as usize];
         let (pa, pb) = (inp.x[prev.nodes[0] as usize], inp.x[prev.nodes[1] as usize]);
-        let dir = (pb[0] - pa[0]) * t[0] + (pb[1] - pa[1]) * t[1];
-        if dir >= 0.0 {
-            state.elastic_gap
-        } else {
-            -state.elastic_gap
-        }
+        carried([pb[0] - pa[0], pb[1] - pa[1]])
     } else if let Some(d) = state.resumed_along {
-        if d[0] * t[0] + d[1] * t[1] >= 0.0 {
-            state.elastic_gap
-        } else {
-            -state.elastic_gap
-        }
+        carried(d)
     } else {
         0.0
     };
@@ -432,54 +425,68 @@ mod tests {
         assert!((gap + 0.1).abs() < 1e-15); // 0.1 inside the body
     }
 
+    /// The corner cases' geometry: master triangle a(−1,0), b(0,0),
+    /// c(1,0.3), counter-clockwise, convex at b; a slave triangle with its
+    /// apex at `apex_s`. Returns positions, surface, broad phase, and the
+    /// boundary index of the apex and the facets a→b and b→c.
+    fn corner_case(apex_s: Vec2) -> (Vec<Vec2>, Surface, crate::BroadPhase, usize, u32, u32) {
+        let x: Vec<Vec2> = vec![[-1.0, 0.0], [0.0, 0.0], [1.0, 0.3], [-0.5, -1.0], [0.5, -1.0], apex_s];
+        let facets = [([0, 1], 0), ([1, 2], 0), ([2, 0], 0), ([3, 4], 0), ([4, 5], 0), ([5, 3], 0)];
+        let apex = [x[2], x[0], x[1], x[5], x[3], x[4]];
+        let surface = Surface::new(x.len(), &facets, &x, &apex);
+        let mut broad = crate::BroadPhase::new(0.5);
+        broad.build(&surface, &x);
+        let node_s = surface.index_of[5] as usize;
+        let facet = |nodes: [u32; 2]| surface.facets.iter().position(|f| f.nodes == nodes).unwrap() as u32;
+        let (ab, bc) = (facet([0, 1]), facet([1, 2]));
+        (x, surface, broad, node_s, ab, bc)
+    }
+
+    /// One evaluation of the corner case at `x` with the apex node last
+    /// touching facet `last` 1 cm deep (deep enough that the "no deeper than
+    /// before" rule lets it continue onto the neighbouring facet, so that
+    /// only the corner rule can refuse): the contacts and the chunk
+    /// partials.
+    fn evaluate_corner(
+        x: &[Vec2],
+        surface: &Surface,
+        broad: &crate::BroadPhase,
+        node_s: usize,
+        last: u32,
+    ) -> (Vec<NodeContact>, Vec<ContactPartial>) {
+        let laws = [InterfaceLaw::new(1e9, 1e9, 0.5, 0.0, 0.0).unwrap()];
+        let v = vec![[0.0; 2]; x.len()];
+        let mass = vec![1.0; x.len()];
+        let inp = NarrowInputs { x, v: &v, mass: &mass, surface, candidates: &broad.candidates, laws: &laws, dt: 1e-4 };
+        let mut states = vec![ContactState::default(); surface.nodes.len()];
+        states[node_s] = ContactState { facet: last, depth: 0.01, ..Default::default() };
+        let mut out = vec![NodeContact { facet: NONE, ..Default::default() }; surface.nodes.len()];
+        let mut partials = vec![ContactPartial::default(); surface.nodes.len().div_ceil(CHUNK)];
+        evaluate(&inp, &mut states, &mut out, &mut partials);
+        (out, partials)
+    }
+
     /// A node that has just left a facet next to a convex corner of the
     /// other body lies inside the line of the facet before the corner
     /// (within the slack past its end) but outside the body: no contact,
     /// where the line alone would give it a 3 mm penetration out of nothing.
     #[test]
     fn no_contact_past_a_convex_corner() {
-        // master: thin triangle a(−1,0), b(0,0), c(1,0.3), counter-clockwise,
-        // convex at b; slave: triangle q, r, s with its apex s just below the
-        // facet b→c and 3 mm above the line of a→b.
-        let x: Vec<Vec2> = vec![[-1.0, 0.0], [0.0, 0.0], [1.0, 0.3], [-0.5, -1.0], [0.5, -1.0], [0.02, 0.003]];
-        let facets = [([0, 1], 0), ([1, 2], 0), ([2, 0], 0), ([3, 4], 0), ([4, 5], 0), ([5, 3], 0)];
-        let apex = [x[2], x[0], x[1], x[5], x[3], x[4]];
-        let surface = Surface::new(x.len(), &facets, &x, &apex);
-        let mut broad = crate::BroadPhase::new(0.5);
-        broad.build(&surface, &x);
-        let laws = [InterfaceLaw::new(1e9, 1e9, 0.5, 0.0, 0.0).unwrap()];
-        let v = vec![[0.0; 2]; x.len()];
-        let mass = vec![1.0; x.len()];
-        let inp = NarrowInputs {
-            x: &x,
-            v: &v,
-            mass: &mass,
-            surface: &surface,
-            candidates: &broad.candidates,
-            laws: &laws,
-            dt: 1e-4,
-        };
-        let node_s = surface.index_of[5] as usize;
-        let facet_bc = surface.facets.iter().position(|f| f.nodes == [1, 2]).unwrap() as u32;
-        let facet_ab = surface.facets.iter().position(|f| f.nodes == [0, 1]).unwrap() as u32;
+        // the slave apex s just below the facet b→c and 3 mm above the line
+        // of a→b
+        let (x, surface, broad, node_s, facet_ab, facet_bc) = corner_case([0.02, 0.003]);
         // the line of a→b alone says: inside, past its end
         let (xi, gap, ..) = project(x[5], x[0], x[1]);
         assert!(xi > 1.0 && xi < 1.0 + XI_SLACK && gap < -0.002, "xi {xi}, gap {gap}");
         assert!(broad.candidates.row(node_s).contains(&facet_ab));
-        let mut states = vec![ContactState::default(); surface.nodes.len()];
         // it was touching b→c last step, so a→b would rank as its continuation
-        states[node_s] = ContactState { facet: facet_bc, ..Default::default() };
-        let mut out = vec![NodeContact { facet: NONE, ..Default::default() }; surface.nodes.len()];
-        let mut partials = vec![ContactPartial::default(); surface.nodes.len().div_ceil(CHUNK)];
-        evaluate(&inp, &mut states, &mut out, &mut partials);
+        let (out, _) = evaluate_corner(&x, &surface, &broad, node_s, facet_bc);
         assert_eq!(out[node_s].facet, NONE);
         assert_eq!(out[node_s].normal_force, 0.0);
         // 1 cm higher it is inside both lines: the depth is the lesser one
         let mut x2 = x.clone();
         x2[5] = [0.02, 0.013];
-        let inp = NarrowInputs { x: &x2, ..inp };
-        states[node_s] = ContactState { facet: facet_bc, ..Default::default() };
-        evaluate(&inp, &mut states, &mut out, &mut partials);
+        let (out, _) = evaluate_corner(&x2, &surface, &broad, node_s, facet_bc);
         let depth_bc = project(x2[5], x[1], x[2]).1;
         assert!(depth_bc < 0.0 && depth_bc > -0.013);
         assert_eq!(out[node_s].facet, facet_bc);
@@ -493,37 +500,13 @@ mod tests {
     /// (2.8×10⁴ J of spring energy from nothing in one step).
     #[test]
     fn no_contact_before_a_convex_corner() {
-        // master as above, convex at b; the slave apex s is 3 mm below a→b,
-        // left of b, and inside the line of b→c (which passes 6 mm lower)
-        let x: Vec<Vec2> = vec![[-1.0, 0.0], [0.0, 0.0], [1.0, 0.3], [-0.5, -1.0], [0.5, -1.0], [-0.02, -0.003]];
-        let facets = [([0, 1], 0), ([1, 2], 0), ([2, 0], 0), ([3, 4], 0), ([4, 5], 0), ([5, 3], 0)];
-        let apex = [x[2], x[0], x[1], x[5], x[3], x[4]];
-        let surface = Surface::new(x.len(), &facets, &x, &apex);
-        let mut broad = crate::BroadPhase::new(0.5);
-        broad.build(&surface, &x);
-        let laws = [InterfaceLaw::new(1e9, 1e9, 0.5, 0.0, 0.0).unwrap()];
-        let v = vec![[0.0; 2]; x.len()];
-        let mass = vec![1.0; x.len()];
-        let inp = NarrowInputs {
-            x: &x,
-            v: &v,
-            mass: &mass,
-            surface: &surface,
-            candidates: &broad.candidates,
-            laws: &laws,
-            dt: 1e-4,
-        };
-        let node_s = surface.index_of[5] as usize;
-        let facet_bc = surface.facets.iter().position(|f| f.nodes == [1, 2]).unwrap() as u32;
-        let facet_ab = surface.facets.iter().position(|f| f.nodes == [0, 1]).unwrap() as u32;
+        // the slave apex s is 3 mm below a→b, left of b, and inside the line
+        // of b→c (which passes 6 mm lower)
+        let (x, surface, broad, node_s, facet_ab, facet_bc) = corner_case([-0.02, -0.003]);
         let (xi, gap, ..) = project(x[5], x[1], x[2]);
         assert!(xi < 0.0 && xi > -XI_SLACK && gap < -0.002, "xi {xi}, gap {gap}");
         assert!(broad.candidates.row(node_s).contains(&facet_bc));
-        let mut states = vec![ContactState::default(); surface.nodes.len()];
-        states[node_s] = ContactState { facet: facet_ab, ..Default::default() };
-        let mut out = vec![NodeContact { facet: NONE, ..Default::default() }; surface.nodes.len()];
-        let mut partials = vec![ContactPartial::default(); surface.nodes.len().div_ceil(CHUNK)];
-        evaluate(&inp, &mut states, &mut out, &mut partials);
+        let (out, partials) = evaluate_corner(&x, &surface, &broad, node_s, facet_ab);
         assert_eq!(out[node_s].facet, NONE);
         assert_eq!(partials.iter().map(|p| p.stored).sum::<f64>(), 0.0);
     }
