@@ -18,7 +18,15 @@ Typical use::
 from . import errors
 from ._core import __version__
 from .contact import Interface
-from .errors import InvertedElementError, NonFiniteError, SimulationError
+from .errors import (
+    CheckpointError,
+    EnergyBalanceError,
+    EnergyBalanceWarning,
+    EnergyGrowthError,
+    InvertedElementError,
+    NonFiniteError,
+    SimulationError,
+)
 from .joints import JointSet, jointed_rectangle
 from .laboratory import MaterialPointResult, material_point
 from .materials import Elastic, MohrCoulombRankine
@@ -29,7 +37,11 @@ from .simulation import Simulation
 
 __all__ = [
     "Amplitude",
+    "CheckpointError",
     "Elastic",
+    "EnergyBalanceError",
+    "EnergyBalanceWarning",
+    "EnergyGrowthError",
     "MaterialPointResult",
     "MohrCoulombRankine",
     "Interface",

@@ -18,12 +18,20 @@ class SimulationError(RuntimeError):
         The step that failed.
     time : float
         Simulated time at the end of that step (s).
+    checkpoint : str or None
+        When the error stopped :meth:`fdem.Simulation.run`: the checkpoint of
+        the last good state (the step before), if the run writes checkpoints.
+    frame : str or None
+        Likewise, the VTU frame of the last good state, if the run writes
+        output.
     """
 
     def __init__(self, message: str, step: int, time: float) -> None:
         super().__init__(message)
         self.step = int(step)
         self.time = float(time)
+        self.checkpoint: str | None = None
+        self.frame: str | None = None
 
 
 class InvertedElementError(SimulationError):
@@ -55,3 +63,61 @@ class NonFiniteError(SimulationError):
         super().__init__(message, step, time)
         self.node = int(node)
         self.quantity = str(quantity)
+
+
+class EnergyGrowthError(SimulationError):
+    """The energy balance showed energy created without a source: the run
+    became unstable (the watchdog of ``Simulation(energy_growth=...)``).
+
+    Attributes
+    ----------
+    created : float
+        Energy created, ``-residual`` (J per unit thickness).
+    largest : float
+        The largest term of the balance at that step (J per unit thickness).
+    """
+
+    def __init__(self, message: str, created: float, largest: float, step: int, time: float) -> None:
+        super().__init__(message, step, time)
+        self.created = float(created)
+        self.largest = float(largest)
+
+
+class EnergyBalanceError(SimulationError):
+    """The energy audit of :meth:`fdem.Simulation.run` found the balance
+    residual above its tolerance and the run was asked to stop
+    (``stop_on_energy_error=True``).
+
+    Attributes
+    ----------
+    residual : float
+        The balance residual (J per unit thickness).
+    largest : float
+        The largest term of the balance (J per unit thickness).
+    """
+
+    def __init__(self, message: str, residual: float, largest: float, step: int, time: float) -> None:
+        super().__init__(message, step, time)
+        self.residual = float(residual)
+        self.largest = float(largest)
+
+
+class EnergyBalanceWarning(UserWarning):
+    """The energy balance residual exceeded the audit's tolerance (1% of the
+    largest term by default) at an output step."""
+
+
+class CheckpointError(ValueError):
+    """A checkpoint could not be written or read: the file is not a
+    checkpoint, is truncated or corrupted, was written by a newer fdem, or
+    belongs to another model. The message says which.
+
+    Attributes
+    ----------
+    source : str
+        The file (or ``"checkpoint data"``) concerned.
+    """
+
+    def __init__(self, message: str, source: str = "") -> None:
+        super().__init__(message)
+        self.source = str(source)

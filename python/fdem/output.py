@@ -89,6 +89,8 @@ def write_vtu(sim: Simulation, path: str | os.PathLike[str]) -> None:
     )
     tmp = path + ".tmp"
     meshio.write(tmp, mesh, file_format="vtu")
+    with open(tmp, "rb+") as f:  # on disk before the index lists it
+        os.fsync(f.fileno())
     os.replace(tmp, path)
 
 
@@ -119,14 +121,67 @@ class VtuSeries:
             old.unlink()
         self.frames: list[tuple[float, str]] = []
         self._energy_keys: list[str] | None = None
+        #: Simulated time of the first frame: output times are ``origin + k
+        #: output_every``, also after a restart.
+        self.origin: float | None = None
         if self.energy_csv.exists():
             self.energy_csv.unlink()
+
+    def state(self) -> dict[str, Any]:
+        """What a checkpoint keeps of the series to continue it."""
+        return {
+            "directory": os.fspath(self.directory),
+            "name": self.name,
+            "frames": [[t, f] for t, f in self.frames],
+            "origin": self.origin,
+        }
+
+    @classmethod
+    def resume(cls, state: dict[str, Any], step: int) -> VtuSeries:
+        """Reopens a series saved in a checkpoint taken at ``step``: keeps
+        the frames the checkpoint lists, deletes frames and energy rows a run
+        wrote after it (they will be written again), rewrites the index."""
+        self = cls.__new__(cls)
+        self.directory = Path(state["directory"])
+        self.name = str(state["name"])
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self.index = self.directory / f"{self.name}.pvd"
+        self.energy_csv = self.directory / f"{self.name}_energy.csv"
+        self.frames = [(float(t), str(f)) for t, f in state["frames"]]
+        self.origin = None if state["origin"] is None else float(state["origin"])
+        kept = {f for _, f in self.frames}
+        for old in self.directory.glob(f"{self.name}_[0-9][0-9][0-9][0-9][0-9].vtu"):
+            if old.name not in kept:
+                old.unlink()
+        missing = [f for f in kept if not (self.directory / f).exists()]
+        if missing:
+            raise FileNotFoundError(
+                f"cannot continue the series {self.index}: frame {sorted(missing)[0]} "
+                "listed in the checkpoint is missing"
+            )
+        self._write_index()
+        self._energy_keys = None
+        if self.energy_csv.exists():
+            with open(self.energy_csv, newline="") as f:
+                rows = list(csv.reader(f))
+            if rows:
+                head, body = rows[0], rows[1:]
+                col = head.index("step")
+                body = [r for r in body if len(r) == len(head) and int(float(r[col])) <= step]
+                tmp = self.energy_csv.with_suffix(".csv.tmp")
+                with open(tmp, "w", newline="") as f:
+                    csv.writer(f).writerows([head, *body])
+                os.replace(tmp, self.energy_csv)
+                self._energy_keys = head
+        return self
 
     def write(self, sim: Simulation) -> Path:
         """Writes the current state as the next frame and updates the index."""
         k = len(self.frames)
         fname = f"{self.name}_{k:05d}.vtu"
         write_vtu(sim, self.directory / fname)
+        if self.origin is None:
+            self.origin = sim.time
         self.frames.append((sim.time, fname))
         self._write_index()
         self._append_energy(sim)
@@ -142,12 +197,16 @@ class VtuSeries:
             lines.append(f'    <DataSet timestep="{t:.9g}" group="" part="0" file={quoteattr(f)}/>')
         lines += ["  </Collection>", "</VTKFile>", ""]
         tmp = self.index.with_suffix(".pvd.tmp")
-        tmp.write_text("\n".join(lines))
+        with open(tmp, "w") as f:
+            f.write("\n".join(lines))
+            f.flush()
+            os.fsync(f.fileno())
         os.replace(tmp, self.index)
 
     def _append_energy(self, sim: Simulation) -> None:
         e = sim.energies()
-        row = {"time": sim.time, "step": sim.steps, **e}
+        rel = abs(e["residual"]) / e["largest_term"] if e["largest_term"] > 0 else 0.0
+        row = {"time": sim.time, "step": sim.steps, **e, "relative_residual": rel}
         new = self._energy_keys is None
         if new:
             self._energy_keys = list(row)

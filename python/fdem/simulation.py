@@ -3,8 +3,13 @@ writes results."""
 
 from __future__ import annotations
 
+import hashlib
+import json
+import math
 import os
 import time as _time
+import warnings
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -12,6 +17,7 @@ from numpy.typing import NDArray
 
 from . import _core
 from ._checks import number, positive
+from .errors import CheckpointError, EnergyBalanceError, EnergyBalanceWarning, SimulationError
 from .model import Model
 from .output import VtuSeries, write_vtu
 from .progress import RunProgress
@@ -40,6 +46,11 @@ class Simulation:
         Stiffness-proportional (element viscous) damping ``β`` (s).
     dt_interval : int
         Steps between re-evaluations of the automatic stable step.
+    energy_growth : float
+        Watchdog: stop with :class:`fdem.errors.EnergyGrowthError` when the
+        energy balance shows more energy created than this fraction of its
+        largest term (checked every 50 steps; an unstable run grows
+        exponentially and is caught within those). 0 turns it off.
 
     Raises
     ------
@@ -58,18 +69,24 @@ class Simulation:
         mass_damping: float = 0.0,
         stiffness_damping: float = 0.0,
         dt_interval: int = 100,
+        energy_growth: float = 0.1,
     ) -> None:
         if not isinstance(model, Model):
             raise ValueError(f"model must be a fdem.Model, got {type(model).__name__}")
         if threads is not None and (int(threads) != threads or threads < 1):
             raise ValueError(f"threads = {threads!r} must be a positive integer")
         self.model = model
-        self._settings = self._check_settings(safety, dt, mass_damping, stiffness_damping, dt_interval)
-        self._core = _core.Simulation(**model.kernel_arrays(), **self._settings, threads=int(threads or 0))
+        self._settings = self._check_settings(safety, dt, mass_damping, stiffness_damping, dt_interval, energy_growth)
+        arrays = model.kernel_arrays()
+        self._fingerprint = _fingerprint(arrays)
+        self._core = _core.Simulation(**arrays, **self._settings, threads=int(threads or 0))
         self._series: dict[tuple[str, str], VtuSeries] = {}
+        self._resume: dict[tuple[str, str], dict[str, Any]] = {}
 
     @staticmethod
-    def _check_settings(safety: Any, dt: Any, alpha: Any, beta: Any, interval: Any) -> dict[str, Any]:
+    def _check_settings(
+        safety: Any, dt: Any, alpha: Any, beta: Any, interval: Any, growth: Any = 0.1
+    ) -> dict[str, Any]:
         s = number("safety", safety)
         if not 0 < s <= 1:
             raise ValueError(f"safety = {s} must lie in (0, 1]")
@@ -81,12 +98,14 @@ class Simulation:
             "mass_damping": positive("mass_damping", alpha, allow_zero=True),
             "stiffness_damping": positive("stiffness_damping", beta, allow_zero=True),
             "dt_interval": int(interval),
+            "energy_growth": positive("energy_growth", growth, allow_zero=True),
         }
 
     def configure(self, **changes: Any) -> Simulation:
         """Changes run settings between stages (``safety``, ``dt``,
-        ``mass_damping``, ``stiffness_damping``, ``dt_interval``)."""
-        known = {"safety", "dt", "mass_damping", "stiffness_damping", "dt_interval"}
+        ``mass_damping``, ``stiffness_damping``, ``dt_interval``,
+        ``energy_growth``)."""
+        known = {"safety", "dt", "mass_damping", "stiffness_damping", "dt_interval", "energy_growth"}
         unknown = set(changes) - known
         if unknown:
             raise ValueError(f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
@@ -94,7 +113,12 @@ class Simulation:
         cur["dt"] = cur.pop("fixed_dt")
         cur.update(changes)
         self._settings = self._check_settings(
-            cur["safety"], cur["dt"], cur["mass_damping"], cur["stiffness_damping"], cur["dt_interval"]
+            cur["safety"],
+            cur["dt"],
+            cur["mass_damping"],
+            cur["stiffness_damping"],
+            cur["dt_interval"],
+            cur["energy_growth"],
         )
         self._core.set_settings(**self._settings)
         return self
@@ -362,6 +386,122 @@ class Simulation:
         """Writes the current state to one VTU file."""
         write_vtu(self, path)
 
+    # --- checkpoints --------------------------------------------------------
+    def _meta(self) -> bytes:
+        from . import __version__
+
+        return json.dumps(
+            {
+                "fdem": __version__,
+                "fingerprint": self._fingerprint,
+                "settings": self._settings,
+                "series": [series.state() for series in self._series.values()],
+            }
+        ).encode()
+
+    def save_checkpoint(self, path: str | os.PathLike[str]) -> Path:
+        """Writes the complete state to ``path`` (atomically: a temporary file,
+        flushed to disk, renamed over ``path``); returns the path.
+
+        The file is versioned and checksummed (docs/checkpoints.md). It holds
+        the kernel's whole state (topology, material state, contact history,
+        the broad phase's candidate list, the excavation schedule, the
+        time-step history, the energy account) and, for
+        :meth:`from_checkpoint`, the run settings, a fingerprint of the
+        model and the output series this simulation writes.
+        """
+        path = Path(path)
+        self._core.write_checkpoint(os.fspath(path), self._meta())
+        return path
+
+    @classmethod
+    def from_checkpoint(cls, path: str | os.PathLike[str], model: Model, *, threads: int | None = None) -> Simulation:
+        """Continues a run from a checkpoint written by :meth:`save_checkpoint`
+        or :meth:`run`, in this or a new process, on any number of threads:
+        the continued run is bit-for-bit the run that was not interrupted.
+
+        ``model`` must be the model the run was built from (rebuilt by the
+        same script); its fingerprint is checked. A :meth:`run` into the same
+        ``output`` directory and ``name`` continues the output series: frames
+        written after the checkpoint are replaced.
+
+        Raises
+        ------
+        fdem.errors.CheckpointError
+            The file is missing, not a checkpoint, truncated, corrupted,
+            written by a newer fdem, or belongs to another model.
+        """
+        if not isinstance(model, Model):
+            raise ValueError(f"model must be a fdem.Model, got {type(model).__name__}")
+        if threads is not None and (int(threads) != threads or threads < 1):
+            raise ValueError(f"threads = {threads!r} must be a positive integer")
+        source = os.fspath(path)
+        core, user = _core.Simulation.read_checkpoint(source, int(threads or 0))
+        try:
+            meta = json.loads(bytes(user).decode())
+            settings, fingerprint, series = meta["settings"], meta["fingerprint"], meta["series"]
+        except (ValueError, KeyError, TypeError) as e:
+            raise CheckpointError(
+                f"{source}: the run description in the checkpoint is unreadable ({e})", source
+            ) from None
+        mine = _fingerprint(model.kernel_arrays())
+        if fingerprint != mine:
+            raise CheckpointError(
+                f"{source}: the checkpoint belongs to another model (fingerprint {fingerprint[:12]}…, "
+                f"this model {mine[:12]}…); rebuild the model exactly as the run that wrote it",
+                source,
+            )
+        self = cls.__new__(cls)
+        self.model = model
+        self._settings = settings
+        self._fingerprint = mine
+        self._core = core
+        self._series = {}
+        self._resume = {(st["directory"], st["name"]): st for st in series}
+        return self
+
+    def _snapshot(self) -> tuple[int, bytes]:
+        return self.steps, self._core.checkpoint_bytes(b"")
+
+    def _last_good_state(self, snapshot: tuple[int, bytes], failed_step: int) -> bool:
+        """Replaces the failed state by the one of the step before
+        ``failed_step``: the snapshot, replayed (runs are deterministic).
+        Returns whether it could."""
+        step0, data = snapshot
+        if failed_step - 1 < step0:
+            return False
+        core, _ = _core.Simulation.from_checkpoint_bytes(data, self.threads)
+        core.step(int(failed_step - 1 - step0))
+        self._core = core
+        return True
+
+    def _checkpoint_path(self, checkpoint: Any, output: Any, name: str) -> Path | None:
+        if checkpoint is True:
+            return None if output is None else Path(output) / f"{name}.ckpt"
+        if checkpoint is False or checkpoint is None:
+            return None
+        return Path(checkpoint)
+
+    def _audit(self, tolerance: float, stop: bool, warned: list[bool], checkpoint: Path | None) -> None:
+        e = self._core.energies()
+        largest = e["largest_term"]
+        if largest <= 0 or abs(e["residual"]) <= tolerance * largest:
+            return
+        rel = abs(e["residual"]) / largest
+        msg = (
+            f"energy balance residual {e['residual']:.4e} J is {100 * rel:.2f}% of the largest term "
+            f"({largest:.4e} J) at step {self.steps}, time {self.time:.6g} s (tolerance {100 * tolerance:g}%)"
+        )
+        if stop:
+            err = EnergyBalanceError(msg, e["residual"], largest, self.steps, self.time)
+            if checkpoint is not None:
+                self.save_checkpoint(checkpoint)
+                err.checkpoint = os.fspath(checkpoint)
+            raise err
+        if not warned[0]:
+            warnings.warn(EnergyBalanceWarning(msg), stacklevel=3)
+            warned[0] = True
+
     def run(
         self,
         until: float,
@@ -371,6 +511,9 @@ class Simulation:
         name: str = "fdem",
         overwrite: bool = False,
         progress: bool = True,
+        checkpoint: bool | str | os.PathLike[str] = True,
+        energy_tolerance: float = 0.01,
+        stop_on_energy_error: bool = False,
     ) -> Simulation:
         """Advances to simulated time ``until`` (s), writing a frame every
         ``output_every`` seconds into the directory ``output``.
@@ -378,28 +521,72 @@ class Simulation:
         The run stops at the first step at or after ``until``; steps are not
         shortened to hit output times, so results do not depend on the output
         interval. A run may be continued by calling :meth:`run` again (the same
-        series continues). Ctrl-C stops within a second at a step boundary
-        after writing the current state as a final frame.
+        series continues), also after :meth:`from_checkpoint`.
+
+        Parameters
+        ----------
+        checkpoint : bool or path
+            Where the run keeps its checkpoint (replaced atomically at every
+            frame, at the end, on Ctrl-C and on an error): ``True`` (default)
+            for ``{output}/{name}.ckpt`` when there is an output directory,
+            a path for that file, ``False`` for none.
+        energy_tolerance : float
+            The energy audit: at every frame (and at the end) the balance
+            residual is compared with this fraction of the balance's largest
+            term; above it, an :class:`fdem.errors.EnergyBalanceWarning` (once
+            per call). Every frame's balance is in ``{name}_energy.csv``.
+        stop_on_energy_error : bool
+            Stop instead, with :class:`fdem.errors.EnergyBalanceError`, after
+            writing the checkpoint.
+
+        Ctrl-C stops the run within a second at a step boundary, after
+        writing the current state as a frame and the checkpoint, and raises
+        ``KeyboardInterrupt``.
 
         Raises
         ------
         fdem.errors.SimulationError
-            When an element inverts or a value becomes NaN; frames written
-            before stay valid.
+            When an element inverts, a value becomes NaN or infinite, or
+            energy grows without a source (the watchdog). The simulation is
+            set back to the last good state (the step before), which is
+            written as a frame and a checkpoint first (their paths are the
+            exception's ``frame`` and ``checkpoint``); frames written before
+            stay valid.
         """
         until = number("until", until)
         if output_every is not None:
             output_every = positive("output_every", output_every)
+        tolerance = positive("energy_tolerance", energy_tolerance)
+        ckpt = self._checkpoint_path(checkpoint, output, name)
         series = None
         if output is not None:
             key = (os.fspath(output), name)
             if key not in self._series:
-                self._series[key] = VtuSeries(output, name, overwrite=overwrite)
-                self._series[key].write(self)
+                if key in self._resume and not overwrite:
+                    self._series[key] = VtuSeries.resume(self._resume.pop(key), self.steps)
+                else:
+                    self._series[key] = VtuSeries(output, name, overwrite=overwrite)
+                    self._series[key].write(self)
             series = self._series[key]
-        next_out = self.time + output_every if output_every else np.inf
+        origin = series.origin if series is not None and series.origin is not None else self.time
+        k_next = math.floor((self.time - origin) / output_every) + 1 if output_every else 0
+        next_out = origin + k_next * output_every if output_every else np.inf
         last_written = self.time
+        warned = [False]
+
+        def frame() -> None:
+            nonlocal last_written
+            if series is not None:
+                series.write(self)
+                last_written = self.time
+            if ckpt is not None:
+                self.save_checkpoint(ckpt)
+            self._audit(tolerance, stop_on_energy_error, warned, ckpt)
+
         budget = 8
+        snapshot = self._snapshot()
+        snap_wall = _time.perf_counter()
+        snap_cost = 0.0
         with RunProgress(self.time, until, enabled=progress) as bar:
             try:
                 while self.time < until:
@@ -412,15 +599,70 @@ class Simulation:
                     elif wall > 0.4 and budget > 1:
                         budget //= 2
                     bar.update(self.time, self.steps)
-                    if series is not None and self.time >= next_out:
-                        series.write(self)
-                        last_written = self.time
+                    if self.time >= next_out:
+                        frame()
                     while self.time >= next_out:
-                        next_out += output_every  # type: ignore[operator]
+                        k_next += 1
+                        next_out = origin + k_next * output_every  # type: ignore[operator]
+                    # an in-memory copy of a good state to fall back on
+                    # (a replay from it gives the step before a failure);
+                    # its cost is kept under 5% of the run
+                    now = _time.perf_counter()
+                    if now - snap_wall > max(2.0, 20 * snap_cost):
+                        snapshot = self._snapshot()
+                        snap_cost = _time.perf_counter() - now
+                        snap_wall = _time.perf_counter()
+            except EnergyBalanceError:
+                raise  # the state is good: the audit wrote its checkpoint
+            except SimulationError as err:
+                if self._last_good_state(snapshot, err.step):
+                    if series is not None:
+                        err.frame = os.fspath(series.write(self))
+                    if ckpt is not None:
+                        err.checkpoint = os.fspath(self.save_checkpoint(ckpt))
+                    err.add_note(
+                        f"the simulation was set back to the last good state, step {self.steps}, t = {self.time:.6g} s"
+                        + (f"; checkpoint {err.checkpoint}" if err.checkpoint else "")
+                        + (f"; frame {err.frame}" if err.frame else "")
+                    )
+                raise
             except KeyboardInterrupt:
                 if series is not None and self.time > last_written:
                     series.write(self)
+                if ckpt is not None:
+                    self.save_checkpoint(ckpt)
                 raise
         if series is not None and self.time > last_written:
             series.write(self)
+        if ckpt is not None:
+            self.save_checkpoint(ckpt)
+        self._audit(tolerance, stop_on_energy_error, warned, ckpt)
         return self
+
+
+def _fingerprint(arrays: dict[str, Any]) -> str:
+    """SHA-256 of everything the kernel is built from: a restart checks that
+    it is given the model the checkpoint was written for."""
+    h = hashlib.sha256()
+
+    def feed(v: Any) -> None:
+        if isinstance(v, np.ndarray):
+            a = np.ascontiguousarray(v)
+            h.update(f"nd{a.dtype.str}{a.shape}".encode())
+            h.update(a.tobytes())
+        elif isinstance(v, dict):
+            h.update(b"{")
+            for k in sorted(v):
+                h.update(repr(k).encode())
+                feed(v[k])
+            h.update(b"}")
+        elif isinstance(v, list | tuple):
+            h.update(b"[")
+            for x in v:
+                feed(x)
+            h.update(b"]")
+        else:
+            h.update(repr(v).encode())
+
+    feed(arrays)
+    return h.hexdigest()

@@ -21,6 +21,7 @@ use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use rayon::prelude::*;
 
 use fdem_mesh::Csr;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::surface::Surface;
 use crate::{Vec2, CHUNK};
@@ -209,6 +210,87 @@ impl BroadPhase {
     /// Number of candidate pairs in the list.
     pub fn pairs(&self) -> usize {
         self.candidates.items.len()
+    }
+}
+
+/// What a checkpoint keeps of a [`BroadPhase`]: everything its candidate
+/// list and its decision to rebuild depend on. The tree itself is not kept:
+/// it is rebuilt from the boxes of the last build when the checkpoint is
+/// read, and its layout never changes the candidates (they are sorted per
+/// node), so a restored run continues bit for bit.
+#[derive(Serialize, Deserialize)]
+struct SavedBroadPhase {
+    margin: f64,
+    /// `[min x, min y, max x, max y]` of each facet box at the last build,
+    /// in the order of `keys`.
+    boxes: Vec<[f64; 4]>,
+    built_at: Vec<Vec2>,
+    candidates: Csr,
+    refits: u32,
+    builds: u64,
+    fresh: bool,
+    changed: bool,
+    keys: Vec<u32>,
+    facet_of_key: Vec<u32>,
+}
+
+impl Serialize for BroadPhase {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        SavedBroadPhase {
+            margin: self.margin,
+            boxes: self.boxes.iter().map(|b| [b.mins.x, b.mins.y, b.maxs.x, b.maxs.y]).collect(),
+            built_at: self.built_at.clone(),
+            candidates: self.candidates.clone(),
+            refits: self.refits,
+            builds: self.builds,
+            fresh: self.fresh,
+            changed: self.changed,
+            keys: self.keys.clone(),
+            facet_of_key: self.facet_of_key.clone(),
+        }
+        .serialize(serializer)
+    }
+}
+
+impl<'de> Deserialize<'de> for BroadPhase {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let s = SavedBroadPhase::deserialize(deserializer)?;
+        if s.boxes.len() != s.keys.len() {
+            return Err(D::Error::custom(format!(
+                "broad phase: {} boxes for {} tree leaves",
+                s.boxes.len(),
+                s.keys.len()
+            )));
+        }
+        if s.keys.iter().any(|&k| k as usize >= s.facet_of_key.len()) {
+            return Err(D::Error::custom("broad phase: a tree leaf has no facet entry"));
+        }
+        let boxes: Vec<Aabb> =
+            s.boxes.iter().map(|b| Aabb::new(Vector::new(b[0], b[1]), Vector::new(b[2], b[3]))).collect();
+        let mut bvh = Bvh::new();
+        if boxes.len() < 3 {
+            for (&k, bx) in s.keys.iter().zip(&boxes) {
+                bvh.insert(*bx, k);
+            }
+        } else {
+            bvh = Bvh::from_iter(BvhBuildStrategy::Binned, s.keys.iter().zip(&boxes).map(|(&k, bx)| (k as usize, *bx)));
+        }
+        Ok(Self {
+            margin: s.margin,
+            bvh,
+            boxes,
+            built_at: s.built_at,
+            candidates: s.candidates,
+            chunk_lists: Vec::new(),
+            chunk_counts: Vec::new(),
+            refits: s.refits,
+            builds: s.builds,
+            fresh: s.fresh,
+            changed: s.changed,
+            keys: s.keys,
+            facet_of_key: s.facet_of_key,
+        })
     }
 }
 

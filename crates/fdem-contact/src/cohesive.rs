@@ -24,7 +24,7 @@
 use crate::Vec2;
 
 /// A cohesive bond between node `a` and its copy `b` (per unit thickness).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Bond {
     /// The two nodes tied together.
     pub nodes: [u32; 2],

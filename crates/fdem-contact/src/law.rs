@@ -3,7 +3,7 @@
 
 /// The constitutive law of one kind of interface (joint, crack, free
 /// boundary), per unit thickness.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InterfaceLaw {
     /// Normal stiffness `k_n` (Pa/m): contact pressure per unit penetration.
     /// A node's penalty spring is `α_n = k_n ℓ` with `ℓ` its tributary length

@@ -34,7 +34,7 @@ const SMOOTH_COS: f64 = 0.866;
 const FACING_COS: f64 = 0.25;
 
 /// What a boundary node remembers between steps.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ContactState {
     /// The facet it touched last step, or [`NONE`].
     pub facet: u32,
@@ -64,7 +64,7 @@ impl Default for ContactState {
 }
 
 /// The contact of one boundary node in this step.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NodeContact {
     /// The facet touched, or [`NONE`].
     pub facet: u32,

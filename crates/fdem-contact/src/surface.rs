@@ -7,7 +7,7 @@ use crate::{Vec2, NONE};
 
 /// One boundary facet, oriented with the body on its left (outward normal
 /// `(dy, −dx)/L`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SurfaceFacet {
     /// Start and end node (mesh ids).
     pub nodes: [u32; 2],
@@ -26,7 +26,7 @@ pub struct SurfaceFacet {
 }
 
 /// The free surfaces of the current mesh.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Surface {
     /// All boundary facets.
     pub facets: Vec<SurfaceFacet>,

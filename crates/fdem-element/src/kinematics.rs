@@ -41,7 +41,7 @@ pub fn mul_2x2(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
 
 /// What an element keeps of its reference configuration: `Dm⁻¹`, the inverse
 /// of the reference edge matrix (1/m), row-major.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ReferenceShape {
     /// `Dm⁻¹` row-major.
     pub dm_inv: [f64; 4],

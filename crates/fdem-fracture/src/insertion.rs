@@ -36,7 +36,7 @@ use fdem_mesh::Csr;
 use crate::Vec2;
 
 /// Parameters of crack insertion.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FractureParams {
     /// An existing edge within this angle (rad) of the crack direction is
     /// opened instead of splitting an element.

@@ -3,7 +3,7 @@
 use crate::{check, ParameterError};
 
 /// Isotropic linear-elastic constants (plane strain, `ε_zz = 0`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Elastic {
     /// Young's modulus `E` (Pa).
     pub young: f64,

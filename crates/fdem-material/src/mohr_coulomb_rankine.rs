@@ -39,7 +39,7 @@ use crate::principal::{Order, Spectral};
 use crate::{check, ParameterError};
 
 /// How the crack-band width `h_c` of an element is measured.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum CrackBand {
     /// The element's width along σ1 when it first reaches `f_t`
     /// (Oliver 1989); dissipates `G_f` per unit crack length within about 1%
@@ -112,7 +112,7 @@ pub const RETURN_ORDER: [(u8, bool); 16] = [
 ];
 
 /// The material parameters, checked.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MohrCoulombRankine {
     /// Elastic constants.
     pub elastic: Elastic,
@@ -140,7 +140,7 @@ pub struct MohrCoulombRankine {
 }
 
 /// What the law remembers per material point.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PlasticState {
     /// Fracturing strain `κ` (−), the shared Rankine hardening variable.
     pub kappa: f64,

@@ -2,7 +2,7 @@
 
 /// A list of lists in two flat arrays: the items of row `i` are
 /// `items[offsets[i]..offsets[i + 1]]`.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Csr {
     /// Row starts, `rows + 1` entries.
     pub offsets: Vec<u32>,

@@ -12,12 +12,12 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBytes, PyDict};
 
 use fdem_solver::material_point::{material_point as drive_point, Path};
 use fdem_solver::{
-    Amplitude, Bond, Constraint, ContactSpec, CrackBand, ExcavationStage, FractureParams, FractureSpec, InterfaceSpec,
-    LawSpec, MaterialSpec, ModelSpec, PressureLoad, RunError, Settings,
+    Amplitude, Bond, CheckpointError, Constraint, ContactSpec, CrackBand, ExcavationStage, FractureParams,
+    FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, PressureLoad, RunError, Settings,
 };
 
 /// Runs `f`, turning a panic into a `RuntimeError`.
@@ -134,10 +134,23 @@ fn run_error(py: Python<'_>, e: RunError) -> PyErr {
             RunError::NonFinite { node, quantity, step, time } => {
                 errors.getattr("NonFiniteError")?.call1((msg.clone(), node, quantity, step, time))?
             }
+            RunError::EnergyGrowth { created, largest, step, time } => {
+                errors.getattr("EnergyGrowthError")?.call1((msg.clone(), created, largest, step, time))?
+            }
         };
         Ok(PyErr::from_value(exc))
     })();
     made.unwrap_or_else(|_| PyRuntimeError::new_err(msg))
+}
+
+/// Converts a checkpoint error into `fdem.errors.CheckpointError`.
+fn checkpoint_error(py: Python<'_>, source: &str, e: CheckpointError) -> PyErr {
+    let msg = format!("{source}: {e}");
+    let made = (|| -> PyResult<PyErr> {
+        let errors = py.import("fdem.errors")?;
+        Ok(PyErr::from_value(errors.getattr("CheckpointError")?.call1((msg.clone(), source))?))
+    })();
+    made.unwrap_or_else(|_| PyValueError::new_err(msg))
 }
 
 /// An explicit FDEM simulation held in Rust. Built by `fdem.Simulation`
@@ -174,7 +187,7 @@ impl PySimulation {
         contact_laws=None, contact_facets=None, contact_facet_laws=None, crack_law=0, contact_margin=None,
         fracture_interval=0, fracture_edge_tolerance=15.0, fracture_crack_tolerance=30.0, fracture_min_quality=0.2, fracture_min_altitude=0.0, fracture_insert_at=0.02,
         stage_times=Vec::new(), stage_elements=Vec::new(),
-        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, threads=0
+        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.1, threads=0
     ))]
     fn new(
         points: PyReadonlyArray2<'_, f64>,
@@ -211,6 +224,7 @@ impl PySimulation {
         safety: f64,
         fixed_dt: Option<f64>,
         dt_interval: u32,
+        energy_growth: f64,
         threads: usize,
     ) -> PyResult<Self> {
         guard(|| {
@@ -346,7 +360,7 @@ impl PySimulation {
                     }
                     stages
                 },
-                settings: Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval },
+                settings: Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth },
             };
             let sim = fdem_solver::Simulation::new(spec, threads).map_err(|e| value_error(e.to_string()))?;
             Ok(PySimulation { sim, poisoned: false })
@@ -397,13 +411,62 @@ impl PySimulation {
         Ok(())
     }
 
+    /// The complete state as checkpoint bytes, with the caller's `user`
+    /// block (see `fdem_solver::Simulation::checkpoint_bytes`).
+    fn checkpoint_bytes<'py>(&self, py: Python<'py>, user: &[u8]) -> PyResult<Bound<'py, PyBytes>> {
+        guard(|| {
+            self.ok()?;
+            Ok(PyBytes::new(py, &self.sim.checkpoint_bytes(user)))
+        })
+    }
+
+    /// Writes a checkpoint file atomically (temporary file, flush, rename).
+    fn write_checkpoint(&self, py: Python<'_>, path: std::path::PathBuf, user: &[u8]) -> PyResult<()> {
+        guard(|| {
+            self.ok()?;
+            let sim = &self.sim;
+            py.detach(|| sim.write_checkpoint(&path, user))
+                .map_err(|e| checkpoint_error(py, &path.display().to_string(), e))
+        })
+    }
+
+    /// A simulation rebuilt from checkpoint bytes on `threads` threads (0:
+    /// all cores), and the caller's block.
+    #[staticmethod]
+    fn from_checkpoint_bytes<'py>(
+        py: Python<'py>,
+        data: &[u8],
+        threads: usize,
+    ) -> PyResult<(PySimulation, Bound<'py, PyBytes>)> {
+        guard(|| {
+            let (sim, user) = fdem_solver::Simulation::from_checkpoint_bytes(data, threads)
+                .map_err(|e| checkpoint_error(py, "checkpoint data", e))?;
+            Ok((PySimulation { sim, poisoned: false }, PyBytes::new(py, &user)))
+        })
+    }
+
+    /// A simulation read from a checkpoint file, and the caller's block.
+    #[staticmethod]
+    fn read_checkpoint<'py>(
+        py: Python<'py>,
+        path: std::path::PathBuf,
+        threads: usize,
+    ) -> PyResult<(PySimulation, Bound<'py, PyBytes>)> {
+        guard(|| {
+            let (sim, user) = py
+                .detach(|| fdem_solver::Simulation::read_checkpoint(&path, threads))
+                .map_err(|e| checkpoint_error(py, &path.display().to_string(), e))?;
+            Ok((PySimulation { sim, poisoned: false }, PyBytes::new(py, &user)))
+        })
+    }
+
     /// Switches the elastic (equilibrium) stage on or off.
     fn set_elastic_stage(&mut self, on: bool) {
         self.sim.set_elastic_stage(on);
     }
 
     /// Replaces the run settings between stages.
-    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval))]
+    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth=0.1))]
     fn set_settings(
         &mut self,
         mass_damping: f64,
@@ -411,10 +474,11 @@ impl PySimulation {
         safety: f64,
         fixed_dt: Option<f64>,
         dt_interval: u32,
+        energy_growth: f64,
     ) -> PyResult<()> {
         guard(|| {
             self.ok()?;
-            let s = Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval };
+            let s = Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth };
             self.sim.set_settings(s).map_err(|e| value_error(e.to_string()))
         })
     }
@@ -713,6 +777,7 @@ impl PySimulation {
             d.set_item("cohesive_elastic", e.cohesive_elastic)?;
             d.set_item("excavated", e.excavated)?;
             d.set_item("residual", e.residual())?;
+            d.set_item("largest_term", e.largest_term())?;
             Ok(d)
         })
     }

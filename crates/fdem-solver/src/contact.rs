@@ -12,6 +12,7 @@ use crate::model::ContactSpec;
 use crate::NONE;
 
 /// Contact state and settings owned by the simulation.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct ContactModel {
     pub laws: Vec<InterfaceLaw>,
     /// Laws other than 0 by facet (sorted pair of the nodes' ancestors).
@@ -23,6 +24,7 @@ pub(crate) struct ContactModel {
     pub states: Vec<ContactState>,
     /// Per boundary node: this step's contact.
     pub out: Vec<NodeContact>,
+    #[serde(skip)]
     pub partials: Vec<ContactPartial>,
     /// Candidate pairs evaluated so far.
     pub pairs_evaluated: u64,
@@ -39,6 +41,11 @@ impl ContactModel {
     /// bonds across cracks.
     pub fn crack_stiffness(&self) -> f64 {
         self.laws[self.crack_law as usize].normal_stiffness
+    }
+
+    /// Sizes the per-chunk partial sums for `boundary_nodes` boundary nodes.
+    pub fn size_partials(&mut self, boundary_nodes: usize) {
+        self.partials = vec![ContactPartial::default(); boundary_nodes.div_ceil(fdem_contact::CHUNK)];
     }
 
     /// Checks and builds the contact model.
@@ -157,7 +164,7 @@ impl ContactModel {
         }
         self.states = states;
         self.out = vec![NodeContact { facet: NONE, ..Default::default() }; new.nodes.len()];
-        self.partials = vec![ContactPartial::default(); new.nodes.len().div_ceil(fdem_contact::CHUNK)];
+        self.size_partials(new.nodes.len());
         self.broad.invalidate();
     }
 

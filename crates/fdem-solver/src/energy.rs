@@ -7,7 +7,7 @@
 //! elastic energy are evaluated at whole steps when reported.
 
 /// Energies of the whole model (J per unit thickness).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Energies {
     /// Kinetic energy at the current whole step.
     pub kinetic: f64,
@@ -71,6 +71,32 @@ impl Energies {
     pub fn residual(&self) -> f64 {
         let supplied = self.external_work + self.support_work + self.kinetic_initial + self.elastic_initial;
         supplied - self.kinetic - self.elastic - self.dissipated()
+    }
+
+    /// The largest magnitude among the terms of the balance (J per unit
+    /// thickness): the scale the residual is judged against.
+    pub fn largest_term(&self) -> f64 {
+        [
+            self.kinetic,
+            self.elastic,
+            self.elastic_initial,
+            self.kinetic_initial,
+            self.external_work,
+            self.support_work,
+            self.mass_damping,
+            self.viscous_damping,
+            self.plastic,
+            self.fracture,
+            self.friction,
+            self.contact_damping,
+            self.contact_elastic,
+            self.cohesive_elastic,
+            self.remeshing,
+            self.resurfacing,
+            self.excavated,
+        ]
+        .iter()
+        .fold(0.0, |m, t| m.max(t.abs()))
     }
 
     /// Everything dissipated, held outside the elements, or taken out so

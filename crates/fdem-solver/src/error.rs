@@ -61,6 +61,18 @@ pub enum RunError {
         /// Simulated time (s).
         time: f64,
     },
+    /// The energy balance shows energy created (a numerical instability):
+    /// `−residual` exceeded the watchdog's fraction of the largest term.
+    EnergyGrowth {
+        /// Energy created, `−residual` (J per unit thickness).
+        created: f64,
+        /// The largest term of the balance (J per unit thickness).
+        largest: f64,
+        /// The step at which the check found it.
+        step: u64,
+        /// Simulated time (s).
+        time: f64,
+    },
 }
 
 impl std::fmt::Display for RunError {
@@ -74,6 +86,13 @@ impl std::fmt::Display for RunError {
             RunError::NonFinite { node, quantity, step, time } => {
                 write!(f, "{quantity} of node {node} became NaN or infinite at step {step}, time {time:.6e} s")
             }
+            RunError::EnergyGrowth { created, largest, step, time } => write!(
+                f,
+                "energy grew without a source at step {step}, time {time:.6e} s: the balance shows {created:.4e} J \
+                 created, {:.1}% of its largest term ({largest:.4e} J); the run is unstable (reduce the \
+                 time-step safety factor or the contact stiffness)",
+                100.0 * created / largest
+            ),
         }
     }
 }

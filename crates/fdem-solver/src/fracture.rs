@@ -15,6 +15,7 @@ use crate::simulation::Simulation;
 use crate::topology::ancestor_pair;
 
 /// Fracture settings and scratch buffers.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct FractureModel {
     pub params: FractureParams,
     /// Steps between checks.
@@ -30,14 +31,20 @@ pub(crate) struct FractureModel {
     /// Largest relative change of total mass and of linear momentum caused
     /// by an insertion so far (both zero in exact arithmetic).
     pub audit: InsertionAudit,
+    #[serde(skip)]
     node_factor: Vec<f64>,
+    #[serde(skip)]
     node_direction: Vec<f64>,
+    #[serde(skip)]
     element_factor: Vec<f64>,
+    #[serde(skip)]
     element_direction: Vec<f64>,
+    #[serde(skip)]
     areas: Vec<f64>,
     /// Each element's failure factor at the previous check: an element whose
     /// factor has grown since, from below 1, is still being torn apart.
     factor_seen: Vec<f64>,
+    #[serde(skip)]
     candidates: Vec<u32>,
 }
 
@@ -64,7 +71,7 @@ impl FractureModel {
 
 /// How well insertions have kept mass and momentum (DESIGN §4.4: both are
 /// unchanged by an insertion).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InsertionAudit {
     /// Largest `|ΔM| / M` over the insertion checks so far.
     pub mass: f64,

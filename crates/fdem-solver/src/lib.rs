@@ -17,6 +17,7 @@
 //! first bad entity) are reduced in chunk order, so a run is bit-for-bit the
 //! same for any number of threads.
 
+mod checkpoint;
 mod contact;
 mod energy;
 mod error;
@@ -31,6 +32,11 @@ mod setup;
 mod simulation;
 mod topology;
 
+/// Steps between checks of the energy-growth watchdog
+/// ([`Settings::energy_growth`]).
+pub const ENERGY_CHECK_INTERVAL: u64 = 50;
+
+pub use checkpoint::{CheckpointError, FORMAT_VERSION as CHECKPOINT_FORMAT};
 pub use energy::Energies;
 pub use error::{RunError, SetupError};
 pub use fdem_contact::Bond;

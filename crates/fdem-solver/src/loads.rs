@@ -3,7 +3,7 @@
 
 /// A piecewise-linear time history `factor(t)` through `(times[i],
 /// values[i])`, constant beyond the ends. Times strictly increasing (s).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Amplitude {
     /// Sample times (s), strictly increasing, at least one.
     pub times: Vec<f64>,
@@ -42,7 +42,7 @@ impl Amplitude {
 /// A kinematic condition on one node: each flagged component of the
 /// velocity is held at `value × amplitude(t)` (m/s). A fixed support is a
 /// value of zero; a roller fixes one component.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Constraint {
     /// The node.
     pub node: u32,
@@ -57,7 +57,7 @@ pub struct Constraint {
 /// Follower pressure on one boundary facet: `pressure × amplitude(t)` (Pa,
 /// positive pushes into the body) acting normal to the current facet, split
 /// equally between its two nodes.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PressureLoad {
     /// The facet's nodes (either order; the body side is found from the mesh).
     pub nodes: [u32; 2],

@@ -41,7 +41,7 @@ pub enum LawSpec {
 }
 
 /// Run settings that may change between stages.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Settings {
     /// Mass-proportional damping `α` (1/s).
     pub mass_damping: f64,
@@ -53,11 +53,24 @@ pub struct Settings {
     pub fixed_dt: Option<f64>,
     /// Steps between re-evaluations of the automatic stable step.
     pub dt_interval: u32,
+    /// Energy-growth watchdog: the run stops when the balance shows more
+    /// energy created than this fraction of its largest term while the held
+    /// energy grows at least sixteenfold per check (checked every
+    /// [`ENERGY_CHECK_INTERVAL`](crate::ENERGY_CHECK_INTERVAL) steps); 0
+    /// turns the check off.
+    pub energy_growth: f64,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Self { mass_damping: 0.0, stiffness_damping: 0.0, safety: 0.8, fixed_dt: None, dt_interval: 100 }
+        Self {
+            mass_damping: 0.0,
+            stiffness_damping: 0.0,
+            safety: 0.8,
+            fixed_dt: None,
+            dt_interval: 100,
+            energy_growth: 0.1,
+        }
     }
 }
 
@@ -99,7 +112,7 @@ pub struct ModelSpec {
 
 /// One excavation stage (DESIGN §4.6): the elements removed once the
 /// simulated time reaches `time`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ExcavationStage {
     /// Simulated time (s) at which the stage is excavated.
     pub time: f64,

@@ -18,7 +18,7 @@ use crate::{CHUNK, NONE};
 pub(crate) const NO_BC: u32 = u32::MAX;
 
 /// A material as the element pass uses it.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Material {
     pub density: f64,
     pub elastic: Elastic,
@@ -246,7 +246,7 @@ pub(crate) fn element_pass(
 
 /// A pressure-loaded facet, resolved: its nodes (body on the left), their
 /// boundary-node indices, the pressure (Pa) and its amplitude.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct PressureFacet {
     pub nodes: [u32; 2],
     pub bnodes: [u32; 2],

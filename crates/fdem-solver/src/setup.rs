@@ -282,6 +282,7 @@ impl Simulation {
             dt_prev: 0.0,
             dt_critical: f64::INFINITY,
             energies: Energies::default(),
+            held_seen: 0.0,
             node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],
             elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
             pool: Arc::new(pool),

@@ -1,0 +1,345 @@
+//! Checkpoints: the complete state of a [`Simulation`] in a versioned,
+//! checksummed file, written atomically (docs/checkpoints.md).
+//!
+//! A checkpoint holds everything a step reads: nodes, elements and their
+//! plastic state, the current topology and its adjacency, surfaces, contact
+//! history and the broad phase's candidate list and build positions, bonds,
+//! the fracture check's memory, loads, supports, the excavation schedule and
+//! its position, the time-step history (`Δt^{n−½}`, `Δt^{n+½}`, the critical
+//! step) and the energy account. Scratch buffers, the thread pool and the
+//! profiling clocks are not kept. A run continued from a checkpoint is
+//! therefore bit-for-bit the run that was not interrupted, for any thread
+//! count (the chunking that fixes the summation order does not depend on it).
+//!
+//! File layout (all integers little-endian):
+//!
+//! | bytes   | content                                            |
+//! |---------|----------------------------------------------------|
+//! | 0–7     | magic `FDEMCKPT`                                   |
+//! | 8–11    | format version ([`FORMAT_VERSION`])                |
+//! | 12–15   | flags (0)                                          |
+//! | 16–23   | length `S` of the state block                      |
+//! | 24–31   | length `U` of the caller's block                   |
+//! | 32–35   | CRC-32 (IEEE) of the `S + U` bytes that follow     |
+//! | 36–39   | CRC-32 of bytes 0–35                               |
+//! | 40–     | state (postcard), then the caller's block          |
+//!
+//! The caller's block is opaque to the kernel; the Python package keeps the
+//! model fingerprint and the output series there.
+
+use std::fs::File;
+use std::io::{Read, Write};
+use std::path::Path;
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use crate::contact::ContactModel;
+use crate::energy::{ElementPartial, Energies, NodePartial};
+use crate::fracture::FractureModel;
+use crate::loads::{Amplitude, Constraint, PressureLoad};
+use crate::model::{ExcavationStage, Settings};
+use crate::passes::{Material, PressureFacet};
+use crate::simulation::{ContactStats, Elements, Nodes, PhaseTimes, Simulation};
+use crate::CHUNK;
+use fdem_contact::Surface;
+use fdem_element::Vec2;
+use fdem_mesh::Csr;
+
+/// The first eight bytes of every checkpoint file.
+pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
+/// The checkpoint format this build writes; it reads this one and older.
+pub const FORMAT_VERSION: u32 = 1;
+const HEADER: usize = 40;
+
+/// Why a checkpoint could not be written or read.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CheckpointError {
+    /// The file could not be read or written (the operating system's
+    /// message).
+    Io(String),
+    /// Not a checkpoint of fdem (wrong magic bytes).
+    NotACheckpoint,
+    /// Written by a newer fdem in a format this build cannot read.
+    NewerFormat {
+        /// The file's format version.
+        found: u32,
+        /// The newest this build reads.
+        supported: u32,
+    },
+    /// The file is shorter than its header says (an interrupted copy).
+    Truncated {
+        /// Bytes the header announces.
+        expected: u64,
+        /// Bytes present.
+        found: u64,
+    },
+    /// A checksum does not match: the file was altered or damaged.
+    Corrupted(String),
+    /// The checksums match but the content is not a consistent state.
+    Invalid(String),
+}
+
+impl std::fmt::Display for CheckpointError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CheckpointError::Io(s) => f.write_str(s),
+            CheckpointError::NotACheckpoint => f.write_str("not an fdem checkpoint (wrong magic bytes)"),
+            CheckpointError::NewerFormat { found, supported } => write!(
+                f,
+                "checkpoint format {found} was written by a newer fdem; this version reads formats up to \
+                 {supported}; upgrade fdem to read it"
+            ),
+            CheckpointError::Truncated { expected, found } => write!(
+                f,
+                "checkpoint is truncated: {found} bytes present, {expected} expected (an interrupted write \
+                 or copy)"
+            ),
+            CheckpointError::Corrupted(s) => write!(f, "checkpoint is corrupted: {s}"),
+            CheckpointError::Invalid(s) => write!(f, "checkpoint holds an inconsistent state: {s}"),
+        }
+    }
+}
+
+impl std::error::Error for CheckpointError {}
+
+/// Generates the borrowed (written) and owned (read) forms of the saved state
+/// from one field list, so the two can never disagree on order or type.
+macro_rules! saved_state {
+    ($($field:ident : $ty:ty),* $(,)?) => {
+        #[derive(Serialize)]
+        struct StateRef<'a> {
+            version: &'a str,
+            $($field: &'a $ty,)*
+        }
+
+        #[derive(Deserialize)]
+        struct StateOwned {
+            #[allow(dead_code)]
+            version: String,
+            $($field: $ty,)*
+        }
+
+        fn state_ref(s: &Simulation) -> StateRef<'_> {
+            StateRef { version: env!("CARGO_PKG_VERSION"), $($field: &s.$field,)* }
+        }
+
+        fn assemble(o: StateOwned, pool: Arc<rayon::ThreadPool>) -> Simulation {
+            let n = o.nodes.x.len();
+            let m = o.elems.conn.len();
+            let mut sim = Simulation {
+                $($field: o.$field,)*
+                phase_times: PhaseTimes::default(),
+                node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],
+                elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
+                pool,
+            };
+            // per-chunk partial sums are sized, never resized, by the passes
+            if let Some(c) = sim.contact.as_mut() {
+                c.size_partials(sim.surface.nodes.len());
+            }
+            sim
+        }
+    };
+}
+
+saved_state! {
+    nodes: Nodes,
+    elems: Elements,
+    materials: Vec<Material>,
+    node_elems: Csr,
+    constraints: Vec<Constraint>,
+    amplitudes: Vec<Amplitude>,
+    amplitude_values: Vec<f64>,
+    pressure_loads: Vec<PressureLoad>,
+    ancestor: Vec<u32>,
+    surface: Surface,
+    pressure: Vec<PressureFacet>,
+    pressure_force: Vec<Vec2>,
+    contact_force: Vec<Vec2>,
+    contact_damping_force: Vec<Vec2>,
+    contact: Option<ContactModel>,
+    fracture: Option<FractureModel>,
+    stages: Vec<ExcavationStage>,
+    next_stage: usize,
+    elastic_stage: bool,
+    contact_stats: ContactStats,
+    omega: Vec<f64>,
+    gravity: Vec2,
+    settings: Settings,
+    time: f64,
+    step: u64,
+    dt: f64,
+    dt_prev: f64,
+    dt_critical: f64,
+    energies: Energies,
+    held_seen: f64,
+}
+
+fn le_u32(b: &[u8]) -> u32 {
+    u32::from_le_bytes([b[0], b[1], b[2], b[3]])
+}
+
+fn le_u64(b: &[u8]) -> u64 {
+    let mut a = [0u8; 8];
+    a.copy_from_slice(&b[..8]);
+    u64::from_le_bytes(a)
+}
+
+impl Simulation {
+    /// The complete state as checkpoint bytes, with `user` (any bytes the
+    /// caller wants back on restore) appended under the same checksum.
+    pub fn checkpoint_bytes(&self, user: &[u8]) -> Vec<u8> {
+        // postcard serialises plain data into a Vec; it fails only on
+        // types it does not support, which a unit test rules out.
+        let state = postcard::to_stdvec(&state_ref(self)).expect("simulation state is serialisable");
+        let mut out = Vec::with_capacity(HEADER + state.len() + user.len());
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes());
+        out.extend_from_slice(&(state.len() as u64).to_le_bytes());
+        out.extend_from_slice(&(user.len() as u64).to_le_bytes());
+        let mut body = crc32fast::Hasher::new();
+        body.update(&state);
+        body.update(user);
+        out.extend_from_slice(&body.finalize().to_le_bytes());
+        let head = crc32fast::hash(&out[..36]);
+        out.extend_from_slice(&head.to_le_bytes());
+        out.extend_from_slice(&state);
+        out.extend_from_slice(user);
+        out
+    }
+
+    /// Rebuilds a simulation from checkpoint bytes on `threads` worker
+    /// threads (0: all cores); returns it with the caller's block.
+    pub fn from_checkpoint_bytes(bytes: &[u8], threads: usize) -> Result<(Self, Vec<u8>), CheckpointError> {
+        if bytes.len() < 8 || &bytes[..8] != MAGIC {
+            return Err(CheckpointError::NotACheckpoint);
+        }
+        if bytes.len() < HEADER {
+            return Err(CheckpointError::Truncated { expected: HEADER as u64, found: bytes.len() as u64 });
+        }
+        if crc32fast::hash(&bytes[..36]) != le_u32(&bytes[36..40]) {
+            return Err(CheckpointError::Corrupted("header checksum mismatch".into()));
+        }
+        let version = le_u32(&bytes[8..12]);
+        if version > FORMAT_VERSION {
+            return Err(CheckpointError::NewerFormat { found: version, supported: FORMAT_VERSION });
+        }
+        if version == 0 {
+            return Err(CheckpointError::Corrupted("format version 0".into()));
+        }
+        let (s_len, u_len) = (le_u64(&bytes[16..24]), le_u64(&bytes[24..32]));
+        let expected = (HEADER as u64).saturating_add(s_len).saturating_add(u_len);
+        let found = bytes.len() as u64;
+        if found < expected {
+            return Err(CheckpointError::Truncated { expected, found });
+        }
+        if found > expected {
+            return Err(CheckpointError::Corrupted(format!("{} bytes after the end of the data", found - expected)));
+        }
+        let body = &bytes[HEADER..];
+        if crc32fast::hash(body) != le_u32(&bytes[32..36]) {
+            return Err(CheckpointError::Corrupted("data checksum mismatch".into()));
+        }
+        let (state, user) = body.split_at(s_len as usize);
+        let owned: StateOwned = postcard::from_bytes(state)
+            .map_err(|e| CheckpointError::Invalid(format!("cannot decode the state: {e}")))?;
+        check_consistent(&owned)?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| CheckpointError::Io(format!("cannot start {threads} threads: {e}")))?;
+        Ok((assemble(owned, Arc::new(pool)), user.to_vec()))
+    }
+
+    /// Writes a checkpoint to `path` atomically: to `path` + `.tmp`, flushed
+    /// to disk, then renamed over `path`, so an interruption leaves the
+    /// previous checkpoint intact.
+    pub fn write_checkpoint(&self, path: &Path, user: &[u8]) -> Result<(), CheckpointError> {
+        let io = |what: &str, p: &Path, e: std::io::Error| CheckpointError::Io(format!("{what} {}: {e}", p.display()));
+        let bytes = self.checkpoint_bytes(user);
+        let mut tmp = path.as_os_str().to_owned();
+        tmp.push(".tmp");
+        let tmp = std::path::PathBuf::from(tmp);
+        {
+            let mut f = File::create(&tmp).map_err(|e| io("cannot create", &tmp, e))?;
+            f.write_all(&bytes).map_err(|e| io("cannot write", &tmp, e))?;
+            f.sync_all().map_err(|e| io("cannot flush", &tmp, e))?;
+        }
+        std::fs::rename(&tmp, path).map_err(|e| io("cannot rename onto", path, e))?;
+        Ok(())
+    }
+
+    /// Reads a checkpoint file written by [`write_checkpoint`](Self::write_checkpoint).
+    pub fn read_checkpoint(path: &Path, threads: usize) -> Result<(Self, Vec<u8>), CheckpointError> {
+        let mut bytes = Vec::new();
+        File::open(path)
+            .and_then(|mut f| f.read_to_end(&mut bytes))
+            .map_err(|e| CheckpointError::Io(format!("cannot read {}: {e}", path.display())))?;
+        Self::from_checkpoint_bytes(&bytes, threads)
+    }
+}
+
+/// The cross-checks that keep a decoded state from indexing out of range in
+/// the next step (the checksums already rule out damage; this guards against
+/// a hand-made file).
+fn check_consistent(s: &StateOwned) -> Result<(), CheckpointError> {
+    let bad = |m: String| Err(CheckpointError::Invalid(m));
+    let n = s.nodes.x.len();
+    let m = s.elems.conn.len();
+    let nodes_ok = [s.nodes.x0.len(), s.nodes.v.len(), s.nodes.mass.len(), s.nodes.bc.len(), s.ancestor.len()]
+        .iter()
+        .all(|&k| k == n);
+    if !nodes_ok {
+        return bad(format!("node arrays disagree on the node count ({n})"));
+    }
+    let elems_ok = [s.elems.reference.len(), s.elems.material.len(), s.elems.active.len(), s.elems.stress.len()]
+        .iter()
+        .all(|&k| k == m)
+        && s.elems.state.len() == m
+        && s.elems.force.len() == 3 * m
+        && s.omega.len() == m;
+    if !elems_ok {
+        return bad(format!("element arrays disagree on the element count ({m})"));
+    }
+    if let Some(e) = s.elems.conn.iter().position(|t| t.iter().any(|&v| v as usize >= n)) {
+        return bad(format!("element {e} refers to a missing node"));
+    }
+    if let Some(e) = s.elems.material.iter().position(|&k| k as usize >= s.materials.len()) {
+        return bad(format!("element {e} refers to a missing material"));
+    }
+    // rows of `c` hold ids below `items` (node_elems holds force slots 3e + k)
+    let csr_ok = |c: &Csr, rows: usize, items: usize| {
+        c.offsets.len() == rows + 1
+            && c.offsets.windows(2).all(|w| w[0] <= w[1])
+            && c.offsets.last().is_some_and(|&e| e as usize == c.items.len())
+            && c.items.iter().all(|&i| (i as usize) < items)
+    };
+    if !csr_ok(&s.node_elems, n, 3 * m) {
+        return bad("the node-to-element lists are inconsistent".into());
+    }
+    let nb = s.surface.nodes.len();
+    if s.surface.nodes.iter().any(|&v| v as usize >= n)
+        || s.surface.facets.iter().any(|f| f.nodes.iter().any(|&v| v as usize >= n))
+        || s.surface.index_of.len() != n
+        || s.pressure_force.len() != nb
+        || !csr_ok(&s.surface.node_facets, nb, s.surface.facets.len())
+    {
+        return bad("the surface is inconsistent with the nodes".into());
+    }
+    if s.amplitude_values.len() != s.amplitudes.len() || s.next_stage > s.stages.len() {
+        return bad("the load or excavation schedule is inconsistent".into());
+    }
+    if let Some(c) = &s.contact {
+        if c.states.len() != nb || c.out.len() != nb || s.contact_force.len() != nb {
+            return bad("the contact history does not match the surface".into());
+        }
+        let cand = &c.broad.candidates;
+        let fresh = cand.offsets.is_empty() && cand.items.is_empty();
+        if !fresh && !csr_ok(cand, cand.offsets.len() - 1, s.surface.facets.len()) {
+            return bad("the contact candidate list refers to missing facets".into());
+        }
+    }
+    Ok(())
+}
