@@ -43,6 +43,10 @@ def index_array(name: str, value: Any, shape: tuple[int | None, ...], upper: int
     if not np.issubdtype(a.dtype, np.integer):
         if not np.all(np.isfinite(a)) or np.any(a != np.round(a)):
             raise ValueError(f"{name}: ids must be integers")
+        if a.size and np.abs(a).max() >= 2.0**62:
+            raise ValueError(f"{name}: id {np.abs(a).max():g} is out of range")
+    elif a.dtype == np.uint64 and a.size and a.max() >= 2**62:
+        raise ValueError(f"{name}: id {a.max()} is out of range")
     a = np.ascontiguousarray(a, dtype=np.int64)
     if a.size:
         lo = int(a.min())
@@ -78,3 +82,16 @@ def number(name: str, value: Any) -> float:
     if not np.isfinite(v):
         raise ValueError(f"{name} = {v} must be finite")
     return v
+
+
+def whole(name: str, value: Any, *, minimum: int = 1, maximum: int = 2**31 - 1) -> int:
+    """An integer in ``[minimum, maximum]`` (integral floats accepted);
+    anything else, NaN and infinities included, is a ``ValueError``."""
+    try:
+        k = int(value)
+        ok = k == value and minimum <= k <= maximum
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise ValueError(f"{name} = {value!r} must be an integer in [{minimum}, {maximum}]")
+    return k

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import _core
-from ._checks import float_array, index_array, positive
+from ._checks import float_array, index_array, positive, whole
 
 __all__ = ["Mesh", "gmsh_rectangle"]
 
@@ -329,8 +329,7 @@ class Mesh:
         sides; the node sets ``lower_left`` etc. the corners.
         """
         w, h = positive("width", width), positive("height", height)
-        if int(nx) != nx or int(ny) != ny or nx < 1 or ny < 1:
-            raise ValueError(f"nx and ny must be positive integers, got {nx}, {ny}")
+        nx, ny = whole("nx", nx, maximum=100_000), whole("ny", ny, maximum=100_000)
         if pattern not in ("alternating", "right", "left"):
             raise ValueError(f"pattern must be 'alternating', 'right' or 'left', got {pattern!r}")
         nx, ny = int(nx), int(ny)

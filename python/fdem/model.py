@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._checks import float_array, number, positive
+from ._checks import float_array, number, positive, whole
 from .contact import Interface
 from .materials import Elastic, MohrCoulombRankine
 from .mesh import Mesh
@@ -307,8 +307,7 @@ class Model:
         that, so the dissipated energy stays G_f per unit crack length.
         Needs :meth:`contact`: crack faces get its ``cracks`` law.
         """
-        if int(check_every) != check_every or check_every < 1:
-            raise ValueError(f"check_every = {check_every!r} must be a positive integer")
+        check_every = whole("check_every", check_every)
         e, c, q = (
             number("edge_tolerance", edge_tolerance),
             number("crack_tolerance", crack_tolerance),

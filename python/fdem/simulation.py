@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import _core
-from ._checks import number, positive
+from ._checks import float_array, index_array, number, positive, whole
 from .errors import CheckpointError, EnergyBalanceError, EnergyBalanceWarning, SimulationError
 from .model import Model
 from .output import VtuSeries, write_vtu
@@ -73,8 +73,8 @@ class Simulation:
     ) -> None:
         if not isinstance(model, Model):
             raise ValueError(f"model must be a fdem.Model, got {type(model).__name__}")
-        if threads is not None and (int(threads) != threads or threads < 1):
-            raise ValueError(f"threads = {threads!r} must be a positive integer")
+        if threads is not None:
+            threads = whole("threads", threads, maximum=4096)
         self.model = model
         self._settings = self._check_settings(safety, dt, mass_damping, stiffness_damping, dt_interval, energy_growth)
         arrays = model.kernel_arrays()
@@ -90,8 +90,7 @@ class Simulation:
         s = number("safety", safety)
         if not 0 < s <= 1:
             raise ValueError(f"safety = {s} must lie in (0, 1]")
-        if int(interval) != interval or interval < 1:
-            raise ValueError(f"dt_interval = {interval!r} must be a positive integer")
+        interval = whole("dt_interval", interval)
         return {
             "safety": s,
             "fixed_dt": None if dt is None else positive("dt", dt),
@@ -255,9 +254,7 @@ class Simulation:
     # --- stepping ---------------------------------------------------------
     def step(self, n: int = 1) -> Simulation:
         """Advances exactly ``n`` steps."""
-        if int(n) != n or n < 0:
-            raise ValueError(f"n = {n!r} must be a non-negative integer")
-        self._core.step(int(n))
+        self._core.step(whole("n", n, minimum=0, maximum=2**63 - 1))
         return self
 
     # --- staging ----------------------------------------------------------
@@ -265,7 +262,10 @@ class Simulation:
         """Removes elements now (an element-set name of the model's mesh or
         element ids), as an excavation stage would; returns how many were
         removed (already removed ones are skipped)."""
-        ids = self.model.mesh.elements(where) if isinstance(where, str) else np.asarray(where, dtype=np.int64)
+        if isinstance(where, str):
+            ids = self.model.mesh.elements(where)
+        else:
+            ids = index_array("elements", where, (None,), upper=self.n_elements)
         return int(self._core.deactivate(np.ascontiguousarray(ids, dtype=np.int64)))
 
     @property
@@ -378,9 +378,13 @@ class Simulation:
 
     def set_prescribed_velocity(self, nodes: Any, values: Any) -> None:
         """Changes the prescribed velocity (m/s) of nodes that already have one."""
-        self._core.set_prescribed_velocity(
-            np.asarray(nodes, dtype=np.int64).ravel(), np.asarray(values, dtype=np.float64).reshape(-1, 2)
-        )
+        ids = index_array("nodes", np.ravel(nodes) if np.ndim(nodes) == 0 else nodes, (None,), upper=self.n_nodes)
+        v = float_array("values", values, (None, 2) if np.ndim(values) == 2 else (2,)).reshape(-1, 2)
+        if len(v) == 1 and len(ids) > 1:
+            v = np.repeat(v, len(ids), axis=0)
+        if len(v) != len(ids):
+            raise ValueError(f"values: {len(v)} rows for {len(ids)} nodes")
+        self._core.set_prescribed_velocity(ids, np.ascontiguousarray(v))
 
     def write_vtu(self, path: str | os.PathLike[str]) -> None:
         """Writes the current state to one VTU file."""
@@ -433,8 +437,8 @@ class Simulation:
         """
         if not isinstance(model, Model):
             raise ValueError(f"model must be a fdem.Model, got {type(model).__name__}")
-        if threads is not None and (int(threads) != threads or threads < 1):
-            raise ValueError(f"threads = {threads!r} must be a positive integer")
+        if threads is not None:
+            threads = whole("threads", threads, maximum=4096)
         source = os.fspath(path)
         core, user = _core.Simulation.read_checkpoint(source, int(threads or 0))
         try:
