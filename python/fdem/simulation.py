@@ -265,7 +265,7 @@ class Simulation:
         if isinstance(where, str):
             ids = self.model.mesh.elements(where)
         else:
-            ids = index_array("elements", where, (None,), upper=self.n_elements)
+            ids = index_array("elements", where, (None,))  # the kernel names a missing one
         return int(self._core.deactivate(np.ascontiguousarray(ids, dtype=np.int64)))
 
     @property

@@ -1,26 +1,14 @@
 //! Checkpoints: a restored run continues bit for bit, and damaged files are
 //! refused with the reason (docs/checkpoints.md).
 
+mod common;
+use common::square;
 use fdem_solver::{CheckpointError, Constraint, LawSpec, MaterialSpec, ModelSpec, Simulation, CHECKPOINT_FORMAT};
 
 /// A damped, gravity-loaded plate of `n × n` cells, supported at the bottom,
 /// with a non-uniform initial velocity so every array carries information.
 fn plate(n: usize) -> ModelSpec {
-    let h = 1.0 / n as f64;
-    let mut points = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            points.push([i as f64 * h, j as f64 * h]);
-        }
-    }
-    let id = |i: usize, j: usize| (j * (n + 1) + i) as u64;
-    let mut triangles = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
+    let (points, triangles) = square(n, 1.0);
     let m = triangles.len();
     let np = points.len();
     let mut s = ModelSpec {

@@ -1,0 +1,21 @@
+//! Meshes shared by the solver's integration tests.
+
+/// A unit square of `n × n` cells split into right triangles.
+pub fn square(n: usize, size: f64) -> (Vec<[f64; 2]>, Vec<[u64; 3]>) {
+    let h = size / n as f64;
+    let mut p = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            p.push([i as f64 * h, j as f64 * h]);
+        }
+    }
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u64;
+    let mut t = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    (p, t)
+}
