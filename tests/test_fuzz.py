@@ -67,6 +67,25 @@ def near_valid(draw: Any, shape: tuple[int, ...], high: float = 10.0) -> Any:
     return a
 
 
+def some_calls(data: Any, calls: list[Any], most: int) -> None:
+    """Makes up to ``most`` of ``calls``, drawn with repetition, in a drawn
+    order; each may refuse its input with an allowed exception."""
+    for k in data.draw(st.lists(st.integers(0, len(calls) - 1), max_size=most)):
+        try:
+            calls[k]()
+        except ALLOWED:
+            pass
+
+
+def steps_or_refuses(model: fdem.Model, steps: int) -> None:
+    """Builds a simulation of ``model`` and steps it, or refuses with an
+    allowed exception."""
+    try:
+        fdem.Simulation(model, threads=1).step(steps)
+    except ALLOWED:
+        pass
+
+
 def square() -> fdem.Mesh:
     return fdem.Mesh.rectangle(1.0, 1.0, 3, 3)
 
@@ -88,11 +107,10 @@ def test_mesh_from_almost_valid_arrays(data):
     points = data.draw(near_valid(base.points.shape, high=1.0))
     triangles = data.draw(near_valid(base.triangles.shape, high=float(base.n_nodes)))
     try:
-        mesh = fdem.Mesh(points, triangles)
-        sim = fdem.Simulation(fdem.Model(mesh, material=ROCK), threads=1)
-        sim.step(2)
+        model = fdem.Model(fdem.Mesh(points, triangles), material=ROCK)
     except ALLOWED:
         return
+    steps_or_refuses(model, 2)
 
 
 @FUZZ
@@ -109,16 +127,8 @@ def test_model_inputs(data):
         lambda: model.pressure(data.draw(near_valid((2, 2), high=n)), data.draw(st.floats())),
         lambda: model.excavate(data.draw(near_valid((2,), high=m)), at=data.draw(st.floats())),
     ]
-    for k in data.draw(st.lists(st.integers(0, len(calls) - 1), max_size=4)):
-        try:
-            calls[k]()
-        except ALLOWED:
-            pass
-    try:
-        sim = fdem.Simulation(model, threads=1)
-        sim.step(3)
-    except ALLOWED:
-        return
+    some_calls(data, calls, 4)
+    steps_or_refuses(model, 3)
 
 
 @FUZZ
@@ -150,11 +160,7 @@ def test_simulation_inputs(data):
             energy_growth=data.draw(st.floats()),
         ),
     ]
-    for k in data.draw(st.lists(st.integers(0, len(calls) - 1), max_size=5)):
-        try:
-            calls[k]()
-        except ALLOWED:
-            pass
+    some_calls(data, calls, 5)
     assert np.isfinite(sim.positions()).all()
 
 

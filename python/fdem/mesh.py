@@ -332,7 +332,6 @@ class Mesh:
         nx, ny = whole("nx", nx, maximum=100_000), whole("ny", ny, maximum=100_000)
         if pattern not in ("alternating", "right", "left"):
             raise ValueError(f"pattern must be 'alternating', 'right' or 'left', got {pattern!r}")
-        nx, ny = int(nx), int(ny)
         xs = origin[0] + w * np.arange(nx + 1) / nx
         ys = origin[1] + h * np.arange(ny + 1) / ny
         gx, gy = np.meshgrid(xs, ys)

@@ -110,11 +110,7 @@ class VtuSeries:
     """
 
     def __init__(self, directory: str | os.PathLike[str], name: str = "fdem", *, overwrite: bool = False) -> None:
-        self.directory = Path(directory)
-        self.name = name
-        self.directory.mkdir(parents=True, exist_ok=True)
-        self.index = self.directory / f"{name}.pvd"
-        self.energy_csv = self.directory / f"{name}_energy.csv"
+        self._place(directory, name)
         if self.index.exists() and not overwrite:
             raise FileExistsError(f"{self.index} already exists; pass overwrite=True or choose another output name")
         for old in self.directory.glob(f"{name}_[0-9][0-9][0-9][0-9][0-9].vtu"):
@@ -126,6 +122,13 @@ class VtuSeries:
         self.origin: float | None = None
         if self.energy_csv.exists():
             self.energy_csv.unlink()
+
+    def _place(self, directory: str | os.PathLike[str], name: str) -> None:
+        self.directory = Path(directory)
+        self.name = name
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self.index = self.directory / f"{name}.pvd"
+        self.energy_csv = self.directory / f"{name}_energy.csv"
 
     def state(self) -> dict[str, Any]:
         """What a checkpoint keeps of the series to continue it."""
@@ -142,23 +145,20 @@ class VtuSeries:
         the frames the checkpoint lists, deletes frames and energy rows a run
         wrote after it (they will be written again), rewrites the index."""
         self = cls.__new__(cls)
-        self.directory = Path(state["directory"])
-        self.name = str(state["name"])
-        self.directory.mkdir(parents=True, exist_ok=True)
-        self.index = self.directory / f"{self.name}.pvd"
-        self.energy_csv = self.directory / f"{self.name}_energy.csv"
+        self._place(state["directory"], str(state["name"]))
         self.frames = [(float(t), str(f)) for t, f in state["frames"]]
         self.origin = None if state["origin"] is None else float(state["origin"])
         kept = {f for _, f in self.frames}
-        for old in self.directory.glob(f"{self.name}_[0-9][0-9][0-9][0-9][0-9].vtu"):
-            if old.name not in kept:
-                old.unlink()
+        # refuse before deleting anything
         missing = [f for f in kept if not (self.directory / f).exists()]
         if missing:
             raise FileNotFoundError(
                 f"cannot continue the series {self.index}: frame {sorted(missing)[0]} "
                 "listed in the checkpoint is missing"
             )
+        for old in self.directory.glob(f"{self.name}_[0-9][0-9][0-9][0-9][0-9].vtu"):
+            if old.name not in kept:
+                old.unlink()
         self._write_index()
         self._energy_keys = None
         if self.energy_csv.exists():
@@ -175,8 +175,10 @@ class VtuSeries:
                 self._energy_keys = head
         return self
 
-    def write(self, sim: Simulation) -> Path:
-        """Writes the current state as the next frame and updates the index."""
+    def write(self, sim: Simulation, energies: dict[str, float] | None = None) -> Path:
+        """Writes the current state as the next frame and updates the index
+        and the energy history (``energies``: ``sim.energies()``, if the
+        caller has it already)."""
         k = len(self.frames)
         fname = f"{self.name}_{k:05d}.vtu"
         write_vtu(sim, self.directory / fname)
@@ -184,7 +186,7 @@ class VtuSeries:
             self.origin = sim.time
         self.frames.append((sim.time, fname))
         self._write_index()
-        self._append_energy(sim)
+        self._append_energy(sim, sim.energies() if energies is None else energies)
         return self.directory / fname
 
     def _write_index(self) -> None:
@@ -203,8 +205,7 @@ class VtuSeries:
             os.fsync(f.fileno())
         os.replace(tmp, self.index)
 
-    def _append_energy(self, sim: Simulation) -> None:
-        e = sim.energies()
+    def _append_energy(self, sim: Simulation, e: dict[str, float]) -> None:
         rel = abs(e["residual"]) / e["largest_term"] if e["largest_term"] > 0 else 0.0
         row = {"time": sim.time, "step": sim.steps, **e, "relative_residual": rel}
         new = self._energy_keys is None

@@ -84,19 +84,16 @@ class Simulation:
         self._resume: dict[tuple[str, str], dict[str, Any]] = {}
 
     @staticmethod
-    def _check_settings(
-        safety: Any, dt: Any, alpha: Any, beta: Any, interval: Any, growth: Any = 0.1
-    ) -> dict[str, Any]:
+    def _check_settings(safety: Any, dt: Any, alpha: Any, beta: Any, interval: Any, growth: Any) -> dict[str, Any]:
         s = number("safety", safety)
         if not 0 < s <= 1:
             raise ValueError(f"safety = {s} must lie in (0, 1]")
-        interval = whole("dt_interval", interval)
         return {
             "safety": s,
             "fixed_dt": None if dt is None else positive("dt", dt),
             "mass_damping": positive("mass_damping", alpha, allow_zero=True),
             "stiffness_damping": positive("stiffness_damping", beta, allow_zero=True),
-            "dt_interval": int(interval),
+            "dt_interval": whole("dt_interval", interval),
             "energy_growth": positive("energy_growth", growth, allow_zero=True),
         }
 
@@ -377,7 +374,8 @@ class Simulation:
         }
 
     def set_prescribed_velocity(self, nodes: Any, values: Any) -> None:
-        """Changes the prescribed velocity (m/s) of nodes that already have one."""
+        """Changes the prescribed velocity (m/s) of nodes that already have
+        one: ``values`` is one ``(vx, vy)`` for all of them or a row per node."""
         ids = index_array("nodes", np.ravel(nodes) if np.ndim(nodes) == 0 else nodes, (None,), upper=self.n_nodes)
         v = float_array("values", values, (None, 2) if np.ndim(values) == 2 else (2,)).reshape(-1, 2)
         if len(v) == 1 and len(ids) > 1:
@@ -486,8 +484,9 @@ class Simulation:
             return None
         return Path(checkpoint)
 
-    def _audit(self, tolerance: float, stop: bool, warned: list[bool], checkpoint: Path | None) -> None:
-        e = self._core.energies()
+    def _audit(self, e: dict[str, float], tolerance: float, stop: bool, warned: list[bool], ckpt: Path | None) -> None:
+        """The energy audit of the state whose energies are ``e``; with
+        ``stop``, the checkpoint ``ckpt`` must hold that state already."""
         largest = e["largest_term"]
         if largest <= 0 or abs(e["residual"]) <= tolerance * largest:
             return
@@ -498,9 +497,7 @@ class Simulation:
         )
         if stop:
             err = EnergyBalanceError(msg, e["residual"], largest, self.steps, self.time)
-            if checkpoint is not None:
-                self.save_checkpoint(checkpoint)
-                err.checkpoint = os.fspath(checkpoint)
+            err.checkpoint = None if ckpt is None else os.fspath(ckpt)
             raise err
         if not warned[0]:
             warnings.warn(EnergyBalanceWarning(msg), stacklevel=3)
@@ -578,14 +575,17 @@ class Simulation:
         last_written = self.time
         warned = [False]
 
-        def frame() -> None:
+        def frame(always: bool = True) -> dict[str, float]:
+            """The state now as a frame (unless already written) and the
+            checkpoint; returns its energies."""
             nonlocal last_written
-            if series is not None:
-                series.write(self)
+            e = self.energies()
+            if series is not None and (always or self.time > last_written):
+                series.write(self, e)
                 last_written = self.time
             if ckpt is not None:
                 self.save_checkpoint(ckpt)
-            self._audit(tolerance, stop_on_energy_error, warned, ckpt)
+            return e
 
         budget = 8
         snapshot = self._snapshot()
@@ -604,7 +604,7 @@ class Simulation:
                         budget //= 2
                     bar.update(self.time, self.steps)
                     if self.time >= next_out:
-                        frame()
+                        self._audit(frame(), tolerance, stop_on_energy_error, warned, ckpt)
                     while self.time >= next_out:
                         k_next += 1
                         next_out = origin + k_next * output_every  # type: ignore[operator]
@@ -631,16 +631,9 @@ class Simulation:
                     )
                 raise
             except KeyboardInterrupt:
-                if series is not None and self.time > last_written:
-                    series.write(self)
-                if ckpt is not None:
-                    self.save_checkpoint(ckpt)
+                frame(always=False)
                 raise
-        if series is not None and self.time > last_written:
-            series.write(self)
-        if ckpt is not None:
-            self.save_checkpoint(ckpt)
-        self._audit(tolerance, stop_on_energy_error, warned, ckpt)
+        self._audit(frame(always=False), tolerance, stop_on_energy_error, warned, ckpt)
         return self
 
 

@@ -84,33 +84,32 @@ impl Simulation {
     /// `(v^{n−½} + v^{n+½}) / 2` of the scheme, with constrained components
     /// at their prescribed values.
     pub fn velocities(&self) -> Vec<Vec2> {
+        (0..self.n_nodes()).map(|i| self.whole_step_velocity(i)).collect()
+    }
+
+    /// The whole-step velocity of node `i` (see [`Self::velocities`]),
+    /// without allocating: the energy watchdog evaluates it inside the
+    /// time loop.
+    fn whole_step_velocity(&self, i: usize) -> Vec2 {
         let h = 0.5 * self.dt_prev;
-        let denom = 1.0 + self.settings.mass_damping * h;
-        let mut amp = self.amplitude_values.clone();
-        for (val, a) in amp.iter_mut().zip(&self.amplitudes) {
-            *val = a.at(self.time);
+        let m = self.nodes.mass[i];
+        let mut v = self.nodes.v[i];
+        if m > 0.0 && h > 0.0 {
+            let f = self.net_force(i);
+            let denom = 1.0 + self.settings.mass_damping * h;
+            v = [(v[0] + h * f[0] / m) / denom, (v[1] + h * f[1] / m) / denom];
         }
-        (0..self.n_nodes())
-            .map(|i| {
-                let m = self.nodes.mass[i];
-                let mut v = self.nodes.v[i];
-                if m > 0.0 && h > 0.0 {
-                    let f = self.net_force(i);
-                    v = [(v[0] + h * f[0] / m) / denom, (v[1] + h * f[1] / m) / denom];
+        let b = self.nodes.bc[i];
+        if b != NO_BC {
+            let c = &self.constraints[b as usize];
+            let a = c.amplitude.map_or(1.0, |k| self.amplitudes[k as usize].at(self.time));
+            for d in 0..2 {
+                if c.fixed[d] {
+                    v[d] = c.value[d] * a;
                 }
-                let b = self.nodes.bc[i];
-                if b != NO_BC {
-                    let c = &self.constraints[b as usize];
-                    let a = c.amplitude.map_or(1.0, |k| amp[k as usize]);
-                    for d in 0..2 {
-                        if c.fixed[d] {
-                            v[d] = c.value[d] * a;
-                        }
-                    }
-                }
-                v
-            })
-            .collect()
+            }
+        }
+        v
     }
 
     /// Resets the half-step velocities so that the whole-step velocities
@@ -291,25 +290,32 @@ impl Simulation {
             .collect()
     }
 
-    /// Kinetic energy at the current whole step (J per unit thickness).
+    /// Kinetic energy at the current whole step (J per unit thickness),
+    /// summed per chunk of nodes, then over chunks.
     pub fn kinetic_energy(&self) -> f64 {
-        let v = self.velocities();
-        let per_chunk: Vec<f64> = v
-            .chunks(CHUNK)
-            .zip(self.nodes.mass.chunks(CHUNK))
-            .map(|(vc, mc)| vc.iter().zip(mc).map(|(v, m)| 0.5 * m * (v[0] * v[0] + v[1] * v[1])).sum())
-            .collect();
-        per_chunk.iter().sum()
+        let n = self.n_nodes();
+        (0..n.div_ceil(CHUNK))
+            .map(|c| {
+                (c * CHUNK..n.min((c + 1) * CHUNK))
+                    .map(|i| {
+                        let v = self.whole_step_velocity(i);
+                        0.5 * self.nodes.mass[i] * (v[0] * v[0] + v[1] * v[1])
+                    })
+                    .sum::<f64>()
+            })
+            .sum()
     }
 
     /// Elastic strain energy `Σ A ½ σ̂ : C⁻¹ : σ̂` (J per unit thickness).
     pub fn elastic_energy(&self) -> f64 {
-        let areas = self.areas();
+        let x = &self.nodes.x;
         (0..self.n_elements())
             .filter(|&e| self.elems.active[e])
             .map(|e| {
+                let t = self.elems.conn[e];
+                let area = signed_area(&[x[t[0] as usize], x[t[1] as usize], x[t[2] as usize]]);
                 let mat = &self.materials[self.elems.material[e] as usize];
-                areas[e] * mat.elastic.energy_density(self.elems.stress[e])
+                area * mat.elastic.energy_density(self.elems.stress[e])
             })
             .sum()
     }
@@ -321,42 +327,52 @@ impl Simulation {
     /// half of the last displacement is still pending and is added here, so
     /// that the account matches the whole-step kinetic energy.
     pub fn energies(&self) -> Energies {
-        let v = self.velocities();
         let h = 0.5 * self.dt_prev;
+        let alpha = self.settings.mass_damping;
+        let g = self.gravity;
         let (mut external, mut support, mut damping, mut contact, mut contact_damping) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for i in 0..self.n_nodes() {
-            let m = self.nodes.mass[i];
-            if m <= 0.0 || h == 0.0 {
-                continue;
-            }
-            let half = self.nodes.v[i];
-            let dx = [h * half[0], h * half[1]];
-            let g = self.gravity;
-            let (p, c) = self.surface_force(i);
-            external += (m * g[0] + p[0]) * dx[0] + (m * g[1] + p[1]) * dx[1];
-            contact += c[0] * dx[0] + c[1] * dx[1];
-            let bn = self.surface.index_of[i];
-            if bn != NONE {
-                if let Some(fd) = self.contact_damping_force.get(bn as usize) {
-                    contact_damping -= fd[0] * dx[0] + fd[1] * dx[1];
+        let mut kinetic = 0.0;
+        let n = self.n_nodes();
+        // nodes by chunks, so the kinetic energy is summed as in
+        // `kinetic_energy`, in one pass and without allocating (the energy
+        // watchdog calls this inside the time loop)
+        for chunk in 0..n.div_ceil(CHUNK) {
+            let mut kinetic_chunk = 0.0;
+            for i in chunk * CHUNK..n.min((chunk + 1) * CHUNK) {
+                let m = self.nodes.mass[i];
+                let v = self.whole_step_velocity(i);
+                kinetic_chunk += 0.5 * m * (v[0] * v[0] + v[1] * v[1]);
+                if m <= 0.0 || h == 0.0 {
+                    continue;
                 }
-            }
-            let alpha = self.settings.mass_damping;
-            damping += alpha * m * (v[i][0] * dx[0] + v[i][1] * dx[1]);
-            let b = self.nodes.bc[i];
-            if b != NO_BC {
-                let f = self.net_force(i);
-                let c = &self.constraints[b as usize];
-                for d in 0..2 {
-                    if c.fixed[d] {
-                        let reaction = m * (v[i][d] - half[d]) / h + alpha * m * v[i][d] - f[d];
-                        support += reaction * dx[d];
+                let half = self.nodes.v[i];
+                let dx = [h * half[0], h * half[1]];
+                let (p, c) = self.surface_force(i);
+                external += (m * g[0] + p[0]) * dx[0] + (m * g[1] + p[1]) * dx[1];
+                contact += c[0] * dx[0] + c[1] * dx[1];
+                let bn = self.surface.index_of[i];
+                if bn != NONE {
+                    if let Some(fd) = self.contact_damping_force.get(bn as usize) {
+                        contact_damping -= fd[0] * dx[0] + fd[1] * dx[1];
+                    }
+                }
+                damping += alpha * m * (v[0] * dx[0] + v[1] * dx[1]);
+                let b = self.nodes.bc[i];
+                if b != NO_BC {
+                    let f = self.net_force(i);
+                    let c = &self.constraints[b as usize];
+                    for d in 0..2 {
+                        if c.fixed[d] {
+                            let reaction = m * (v[d] - half[d]) / h + alpha * m * v[d] - f[d];
+                            support += reaction * dx[d];
+                        }
                     }
                 }
             }
+            kinetic += kinetic_chunk;
         }
         Energies {
-            kinetic: self.kinetic_energy(),
+            kinetic,
             elastic: self.elastic_energy(),
             external_work: self.energies.external_work + external,
             support_work: self.energies.support_work + support,
