@@ -136,7 +136,7 @@ macro_rules! saved_state {
             };
             // per-chunk partial sums are sized, never resized, by the passes
             if let Some(c) = sim.contact.as_mut() {
-                c.size_partials(sim.surface.nodes.len());
+                c.size_scratch(&sim.surface);
             }
             sim
         }

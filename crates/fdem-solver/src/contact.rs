@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use fdem_contact::narrow::{self, ContactPartial, NarrowInputs};
+use fdem_contact::narrow::{self, ContactPartial, FacetFrame, NarrowInputs};
 use fdem_contact::{BroadPhase, ContactState, InterfaceLaw, NodeContact, Surface};
 use fdem_element::Vec2;
 
@@ -26,6 +26,9 @@ pub(crate) struct ContactModel {
     pub out: Vec<NodeContact>,
     #[serde(skip)]
     pub partials: Vec<ContactPartial>,
+    /// Per facet: its frame at the current evaluation (scratch).
+    #[serde(skip)]
+    frames: Vec<FacetFrame>,
     /// Candidate pairs evaluated so far.
     pub pairs_evaluated: u64,
     /// Largest stiffness over all laws (Pa/m), for the stable step.
@@ -43,9 +46,11 @@ impl ContactModel {
         self.laws[self.crack_law as usize].normal_stiffness
     }
 
-    /// Sizes the per-chunk partial sums for `boundary_nodes` boundary nodes.
-    pub fn size_partials(&mut self, boundary_nodes: usize) {
-        self.partials = vec![ContactPartial::default(); boundary_nodes.div_ceil(fdem_contact::CHUNK)];
+    /// Sizes the scratch buffers (per-chunk partial sums, facet frames)
+    /// for `surface`: at a topology change, never in the time loop.
+    pub fn size_scratch(&mut self, surface: &Surface) {
+        self.partials = vec![ContactPartial::default(); surface.nodes.len().div_ceil(fdem_contact::CHUNK)];
+        self.frames = vec![FacetFrame::default(); surface.facets.len()];
     }
 
     /// Checks and builds the contact model.
@@ -91,6 +96,7 @@ impl ContactModel {
             states: Vec::new(),
             out: Vec::new(),
             partials: Vec::new(),
+            frames: Vec::new(),
             pairs_evaluated: 0,
             max_stiffness,
             max_damping,
@@ -164,7 +170,7 @@ impl ContactModel {
         }
         self.states = states;
         self.out = vec![NodeContact { facet: NONE, ..Default::default() }; new.nodes.len()];
-        self.size_partials(new.nodes.len());
+        self.size_scratch(new);
         self.broad.invalidate();
     }
 
@@ -182,7 +188,17 @@ impl ContactModel {
         forces: &mut [Vec2],
         damping: &mut [Vec2],
     ) -> ContactPartial {
-        let inp = NarrowInputs { x, v, mass, surface, candidates: &self.broad.candidates, laws: &self.laws, dt };
+        narrow::facet_frames(surface, x, &mut self.frames);
+        let inp = NarrowInputs {
+            x,
+            v,
+            mass,
+            surface,
+            frames: &self.frames,
+            candidates: &self.broad.candidates,
+            laws: &self.laws,
+            dt,
+        };
         narrow::evaluate(&inp, &mut self.states, &mut self.out, &mut self.partials);
         narrow::assemble(surface, &self.out, forces, damping);
         let mut sum = ContactPartial::default();
