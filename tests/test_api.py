@@ -170,3 +170,45 @@ def test_joint_faces_are_written_as_lines(tmp_path):
     lines = m.cells[1].data
     assert m.cells[1].type == "line" and len(lines) == len(mesh.facet_sets["v"])
     assert np.all(m.cell_data["interface"][1] == 1) and np.all(m.cell_data["interface"][0] == -1)
+
+
+def _spread(mesh):
+    """Spread of node ids within each triangle (max − min)."""
+    t = mesh.triangles
+    return t.max(axis=1) - t.min(axis=1)
+
+
+def test_reordered_mesh_is_local_and_keeps_its_groups():
+    mesh = fdem.jointed_rectangle(20.0, 10.0, 0.5, [fdem.JointSet(90, 10.0, 3.0, 2.0, name="v")])
+    rng = np.random.default_rng(7)
+    pn, pe = rng.permutation(mesh.n_nodes), rng.permutation(mesh.n_elements)
+    inv = np.empty_like(pn)
+    inv[pn] = np.arange(len(pn))
+    shuffled = fdem.Mesh(
+        mesh.points[pn],
+        inv[mesh.triangles[pe]],
+        interface_nodes=mesh.interface_nodes[pn],
+        facet_sets={k: inv[v] for k, v in mesh.facet_sets.items()},
+        element_sets={"first": np.flatnonzero(pe < 10)},
+    )
+    # a random numbering spreads a triangle's nodes over half the ids (the
+    # expected range of three uniform draws); along the Hilbert curve most
+    # triangles' nodes lie within a few ids (a jump where the curve leaves a
+    # quadrant is rare: the mean grows like √n)
+    n = mesh.n_nodes
+    assert np.median(_spread(shuffled)) > 0.3 * n
+    out = shuffled.reordered()
+    for m in (out, mesh):  # the generator returns it ordered
+        assert np.median(_spread(m)) <= 16 and _spread(m).mean() < 0.05 * n
+    # the same mesh: triangles as coordinate triples, groups by coordinates
+    key = lambda m, t: sorted(map(tuple, np.round(m.points[t].reshape(len(t), -1), 12).tolist()))  # noqa: E731
+    assert key(out, out.triangles) == key(mesh, mesh.triangles)
+    for name, facets in mesh.facet_sets.items():
+        assert key(out, out.facet_sets[name]) == key(mesh, facets), name
+    assert key(out, out.triangles[out.element_sets["first"]]) == key(mesh, mesh.triangles[pe[pe < 10]])
+    assert out.interface_nodes.sum() == mesh.interface_nodes.sum()
+    # deterministic, and ordering an ordered mesh changes nothing
+    again = shuffled.reordered()
+    assert np.array_equal(again.triangles, out.triangles) and np.array_equal(again.points, out.points)
+    twice = out.reordered()
+    assert np.array_equal(twice.triangles, out.triangles) and np.array_equal(twice.points, out.points)

@@ -163,10 +163,13 @@ def test_quick_caving_runs_undercuts_in_order_and_caves(quick_caving):
     for k in range(1, 9):
         xs = np.abs(c[model.mesh.elements(f"undercut_{k}"), 0])
         assert xs.max() < 10 * k and (k == 1 or xs.min() >= 10 * (k - 1) - case.size)
-    # rock below the base the support stood on (measured 119 m² at 0.8 s)
-    assert summary["caved_area_m2"] > 50.0
+    # rock below the base the support stood on. How much has fallen by
+    # 0.8 s is chaotic: the same case numbered five ways (generator order,
+    # Hilbert, reversed Hilbert, random, sorted by x) gave 40, 57, 59, 69
+    # and 119 m² (4 130–4 395 cracks). The bound is half the smallest.
+    assert summary["caved_area_m2"] > 20.0
     y = sim.positions()[sim.triangles()].mean(axis=1)[:, 1]
-    assert (y[sim.active()] < BOTTOM - 1).any()
+    assert sim.areas()[sim.active() & (y < BOTTOM)].sum() == pytest.approx(summary["caved_area_m2"], rel=1e-12)
     assert summary["cracks_inserted"] > 0 and summary["fragments"] > 1
     # the lithostatic check is test_equilibrium_column (1%); this coarse
     # case's band just below the elastic cap is 2.3% off (docs/caving.md)

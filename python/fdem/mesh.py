@@ -179,6 +179,35 @@ class Mesh:
             interface_nodes=self._interface,
         )
 
+    def reordered(self) -> Mesh:
+        """A copy with nodes and elements renumbered along a Hilbert curve
+        through the mesh (nodes by position, elements by centroid), groups
+        carried over in their order.
+
+        The time loop gathers each element's nodes and each node's element
+        forces; with neighbours stored near each other those reads hit the
+        cache. Measured on the 135 672-element block-caving mesh (2 threads):
+        the whole step 1.38× faster than in the generator's order
+        (docs/performance.md). Coincident nodes keep their relative order,
+        so the result is deterministic. The generators of unstructured
+        meshes (:meth:`polygon`, :func:`fdem.jointed_rectangle`) return
+        reordered meshes; call it on meshes read from files.
+        """
+        node_order = np.argsort(_hilbert_key(self._points), kind="stable")
+        elem_order = np.argsort(_hilbert_key(self.centroids()), kind="stable")
+        new_node = np.empty(self.n_nodes, dtype=np.int64)
+        new_node[node_order] = np.arange(self.n_nodes)
+        new_elem = np.empty(self.n_elements, dtype=np.int64)
+        new_elem[elem_order] = np.arange(self.n_elements)
+        return Mesh(
+            self._points[node_order],
+            new_node[self._triangles[elem_order]],
+            node_sets={k: new_node[v] for k, v in self._node_sets.items()},
+            facet_sets={k: new_node[v] for k, v in self._facet_sets.items()},
+            element_sets={k: new_elem[v] for k, v in self._element_sets.items()},
+            interface_nodes=self._interface[node_order],
+        )
+
     @classmethod
     def combine(cls, *parts: Mesh, prefixes: Sequence[str] | None = None) -> Mesh:
         """Several meshes as one model of separate bodies (e.g. a block on a
@@ -394,7 +423,7 @@ class Mesh:
         points, triangles, _ = _core.triangulate(
             np.ascontiguousarray(pts), np.zeros((0, 4)), np.sqrt(3) / 4 * s * s, float(min_angle), int(max_nodes)
         )
-        mesh = cls(points, triangles)
+        mesh = cls(points, triangles).reordered()
         return mesh.with_sets(facet_sets={"boundary": mesh.boundary_facets()})
 
     @classmethod
@@ -473,6 +502,32 @@ class Mesh:
             facet_sets={k: np.concatenate(v) for k, v in facet_sets.items()},
             element_sets={k: np.concatenate(v) for k, v in element_sets.items()},
         )
+
+
+def _hilbert_key(points: NDArray[np.float64], bits: int = 16) -> NDArray[np.uint64]:
+    """Index of each point along a Hilbert curve of ``2^bits`` cells a side
+    over the points' bounding square (the classic bit-by-bit
+    rotate-and-reflect construction, vectorised over the points)."""
+    lo = points.min(axis=0)
+    span = float((points.max(axis=0) - lo).max()) or 1.0
+    n = 1 << bits
+    q = np.minimum(((points - lo) / span * n).astype(np.int64), n - 1)
+    x, y = q[:, 0].copy(), q[:, 1].copy()
+    d = np.zeros(len(points), dtype=np.uint64)
+    s = n >> 1
+    while s > 0:
+        rx = (x & s) > 0
+        ry = (y & s) > 0
+        d += np.uint64(s) * np.uint64(s) * ((3 * rx.astype(np.uint64)) ^ ry.astype(np.uint64))
+        # rotate the quadrant so that the curve inside it starts and ends
+        # where the coarser level expects
+        flip = ~ry & rx
+        x = np.where(flip, n - 1 - x, x)
+        y = np.where(flip, n - 1 - y, y)
+        swap = ~ry
+        x, y = np.where(swap, y, x), np.where(swap, x, y)
+        s >>= 1
+    return d
 
 
 def _rebuild(points: Any, triangles: Any, ns: Any, fs: Any, es: Any, iface: Any) -> Mesh:
