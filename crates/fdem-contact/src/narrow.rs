@@ -213,16 +213,15 @@ fn corner_gap(surface: &Surface, x: &[Vec2], frames: &[FacetFrame], f: u32, at_e
         let [p, q] = surface.facets[k as usize].nodes;
         k != f && if at_end { p == v } else { q == v }
     })?;
-    let [p, q] = surface.facets[k as usize].nodes;
-    let (xa, xb, xp, xq) = (x[a as usize], x[b as usize], x[p as usize], x[q as usize]);
-    let (d, e) = ([xb[0] - xa[0], xb[1] - xa[1]], [xq[0] - xp[0], xq[1] - xp[1]]);
+    let p = surface.facets[k as usize].nodes[0];
+    let (d, e) = (frames[f as usize].t, frames[k as usize].t);
     // the turn from the first facet along the surface to the second: from
     // `f` to the next one past its end, from the previous one to `f` before
     // its start
     let cross = d[0] * e[1] - d[1] * e[0];
     let turn = if at_end { cross } else { -cross };
-    let smooth = d[0] * e[0] + d[1] * e[1] >= SMOOTH_COS * d[0].hypot(d[1]) * e[0].hypot(e[1]);
-    (turn > 0.0 && smooth).then(|| frames[k as usize].project(s, xp).1)
+    let smooth = d[0] * e[0] + d[1] * e[1] >= SMOOTH_COS;
+    (turn > 0.0 && smooth).then(|| frames[k as usize].project(s, x[p as usize]).1)
 }
 
 /// Inputs of the narrow phase.
