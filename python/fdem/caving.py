@@ -170,6 +170,49 @@ def probe_stress(sim: Simulation, points: Any) -> NDArray[np.float64]:
     return out
 
 
+def area_below(corners: NDArray[np.float64], height: float) -> NDArray[np.float64]:
+    """Area (m²) of each triangle below the line ``y = height``.
+
+    ``corners`` has shape (n, 3, 2). With the corners' heights sorted
+    ``y_a ≤ y_b ≤ y_c`` and A the area, the part below h is
+    ``A (h − y_a)² / ((y_b − y_a)(y_c − y_a))`` up to ``y_b`` and
+    ``A [1 − (y_c − h)² / ((y_c − y_a)(y_c − y_b))]`` above it (the cut-off
+    triangles are similar to the halves the line through the middle corner
+    makes).
+    """
+    y = np.sort(corners[:, :, 1], axis=1)
+    ya, yb, yc = y[:, 0], y[:, 1], y[:, 2]
+    d1, d2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    area = 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+    # a zero denominator belongs to a branch that is never taken (a flat
+    # bottom or top); 1 keeps the unused value finite
+    d_low, d_high = (yb - ya) * (yc - ya), (yc - ya) * (yc - yb)
+    low = area * (height - ya) ** 2 / np.where(d_low > 0, d_low, 1.0)
+    high = area * (1.0 - (yc - height) ** 2 / np.where(d_high > 0, d_high, 1.0))
+    return np.where(height <= ya, 0.0, np.where(height <= yb, low, np.where(height < yc, high, area)))
+
+
+def strip_means(
+    corners: NDArray[np.float64], values: NDArray[np.float64], edges: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Mean of an element-wise constant field over horizontal strips.
+
+    ``corners`` (n, 3, 2) are the triangles, ``values`` (n,) the field,
+    ``edges`` (k + 1,) the strips' bounding heights, ascending. Each element
+    counts with the part of its area inside the strip, so a strip's mean is
+    the field's integral over the strip divided by the strip's area. That
+    is what statics fixes: with frictionless sides, the integral of σ_yy
+    along any horizontal cut is the load above it, and a strip's mean is
+    the average of its cuts. Binning whole elements by centroid instead
+    reads 5 m strips of 4 m elements 4.8% off the lithostatic value
+    (docs/caving.md). Returns the means and the strips' areas (m²).
+    """
+    below = np.stack([area_below(corners, float(h)) for h in edges])
+    share = np.diff(below, axis=0)
+    area = share.sum(axis=1)
+    return (share @ values) / area, area
+
+
 def _plot_energy(csv_path: Path, png: Path) -> None:
     import matplotlib
 
@@ -249,24 +292,18 @@ def run_caving(
         "equilibrium_speed": eq["max_velocity"],
     }
     # the stress state the undercut starts from, against the lithostatic
-    # one: σ_yy averaged (area-weighted) over 5 m horizontal bands across
-    # the whole width, which statics fixes at −(p + γ depth) whatever the
-    # joints do locally (the sides are frictionless rollers)
-    c = sim.positions()[sim.triangles()].mean(axis=1)
-    s, a = sim.stress(), sim.areas()
+    # one: σ_yy averaged over 5 m horizontal strips across the whole width,
+    # which statics fixes at −(p + γ depth) at the strip's middle whatever
+    # the joints do locally (the sides are frictionless rollers)
     edges = np.arange(BOTTOM + case.support, TOP - case.cap + 1e-9, 5.0)
-    band = np.digitize(c[:, 1], edges) - 1
-    inside = (band >= 0) & (band < len(edges) - 1)
-    n_bands = len(edges) - 1
-    area = np.bincount(band[inside], weights=a[inside], minlength=n_bands)
-    mean_syy = np.bincount(band[inside], weights=(a * s[:, 1])[inside], minlength=n_bands) / area
-    mean_y = np.bincount(band[inside], weights=(a * c[:, 1])[inside], minlength=n_bands) / area
-    syy_lith = -(TOP_PRESSURE + UNIT_WEIGHT * (TOP - mean_y))
+    active = sim.active()
+    mean_syy, _ = strip_means(sim.positions()[sim.triangles()[active]], sim.stress()[active, 1], edges)
+    syy_lith = -(TOP_PRESSURE + UNIT_WEIGHT * (TOP - 0.5 * (edges[1:] + edges[:-1])))
     rest["lithostatic_error"] = float(np.max(np.abs(mean_syy / syy_lith - 1)))
     if progress:
         print(
             f"at rest after {eq['time']:.3f} s ({int(eq['steps'])} steps): largest speed {eq['max_velocity']:.1e} m/s,"
-            f" σyy (5 m bands) within {100 * rest['lithostatic_error']:.2f}% of lithostatic",
+            f" σyy (5 m strips) within {100 * rest['lithostatic_error']:.2f}% of lithostatic",
             flush=True,
         )
     figure_times = sorted({0.0, case.start + case.interval * 3, case.until / 2, case.until})
