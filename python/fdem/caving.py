@@ -103,7 +103,7 @@ class CavingCase:
     def quick() -> CavingCase:
         """A coarse, fast version for tests and the demo: 4 m elements, joint
         spacings ×4, the undercut advanced every 0.06 s, run to 0.8 s
-        (about 50 s on 2 cores, 4 872 elements at the start)."""
+        (about 30 s on 2 cores, 4 872 elements at the start)."""
         return CavingCase(size=4.0, joint_scale=4.0, support=5.0, until=0.8, interval=0.06, output_every=0.2)
 
 
