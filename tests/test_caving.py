@@ -172,7 +172,7 @@ def test_quick_caving_runs_undercuts_in_order_and_caves(quick_caving):
     assert sim.areas()[sim.active() & (y < BOTTOM)].sum() == pytest.approx(summary["caved_area_m2"], rel=1e-12)
     assert summary["cracks_inserted"] > 0 and summary["fragments"] > 1
     # issue 6 (1): at rest, σ_yy over 5 m strips across the width within 2%
-    # of lithostatic (measured 0.89% with 4 m elements, 0.12% at the
+    # of lithostatic (measured 0.89% with 4 m elements, 0.10% at the
     # paper's scale; the column check is test_equilibrium_column)
     assert summary["equilibrium_speed"] < 1e-3
     assert summary["lithostatic_error"] < 0.02
