@@ -5,7 +5,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use fdem_benches::block_grid;
-use fdem_contact::narrow::{self, ContactPartial, NarrowInputs};
+use fdem_contact::narrow::{self, ContactPartial, FacetFrame, NarrowInputs};
 use fdem_contact::{BroadPhase, ContactState, InterfaceLaw, NodeContact, Surface};
 
 fn contact(c: &mut Criterion) {
@@ -58,17 +58,26 @@ fn contact(c: &mut Criterion) {
             let mut out = vec![NodeContact::default(); nb];
             let mut partials = vec![ContactPartial::default(); nb.div_ceil(fdem_contact::CHUNK)];
             let laws = [law];
-            let inp = NarrowInputs {
-                x: &x,
-                v: &v,
-                mass: &mass,
-                surface: &surface,
-                candidates: &bp.candidates,
-                laws: &laws,
-                dt: 1e-6,
-            };
+            let mut frames = vec![FacetFrame::default(); surface.facets.len()];
+            // one evaluation as the solver does it: the facets' frames, then
+            // the candidates
             narrow_g.bench_function(BenchmarkId::new(format!("pairs_{pairs}"), threads), |b| {
-                b.iter(|| pool.install(|| narrow::evaluate(&inp, &mut states, &mut out, &mut partials)))
+                b.iter(|| {
+                    pool.install(|| {
+                        narrow::facet_frames(&surface, &x, &mut frames);
+                        let inp = NarrowInputs {
+                            x: &x,
+                            v: &v,
+                            mass: &mass,
+                            surface: &surface,
+                            frames: &frames,
+                            candidates: &bp.candidates,
+                            laws: &laws,
+                            dt: 1e-6,
+                        };
+                        narrow::evaluate(&inp, &mut states, &mut out, &mut partials)
+                    })
+                })
             });
         }
     }
