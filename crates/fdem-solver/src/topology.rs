@@ -86,25 +86,30 @@ pub(crate) fn resolve_pressures(
     ancestor: &[u32],
     strict: bool,
 ) -> Result<Vec<PressureFacet>, String> {
-    let mut by_pair: BTreeMap<(u32, u32), Vec<[u32; 2]>> = BTreeMap::new();
+    // only the loaded pairs are looked for: a few hundred loads against
+    // the whole surface (every joint and crack face), at every insertion
+    let mut by_pair: BTreeMap<(u32, u32), Vec<[u32; 2]>> =
+        loads.iter().map(|p| ((p.nodes[0].min(p.nodes[1]), p.nodes[0].max(p.nodes[1])), Vec::new())).collect();
     for f in &surface.facets {
-        by_pair.entry(ancestor_pair(ancestor, f.nodes[0], f.nodes[1])).or_default().push(f.nodes);
+        if let Some(list) = by_pair.get_mut(&ancestor_pair(ancestor, f.nodes[0], f.nodes[1])) {
+            list.push(f.nodes);
+        }
     }
     let mut out = Vec::with_capacity(loads.len());
     for p in loads {
         let [a, b] = p.nodes;
         match by_pair.get(&(a.min(b), a.max(b))) {
-            Some(list) => {
+            Some(list) if !list.is_empty() => {
                 for &nodes in list {
                     let bnodes = nodes.map(|n| surface.index_of[n as usize]);
                     debug_assert!(bnodes.iter().all(|&b| b != NONE));
                     out.push(PressureFacet { nodes, bnodes, pressure: p.pressure, amplitude: p.amplitude });
                 }
             }
-            None if strict => {
+            _ if strict => {
                 return Err(format!("pressure facet ({a}, {b}) is not an edge on the boundary of the mesh"));
             }
-            None => {}
+            _ => {}
         }
     }
     Ok(out)
