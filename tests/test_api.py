@@ -212,3 +212,16 @@ def test_reordered_mesh_is_local_and_keeps_its_groups():
     assert np.array_equal(again.triangles, out.triangles) and np.array_equal(again.points, out.points)
     twice = out.reordered()
     assert np.array_equal(twice.triangles, out.triangles) and np.array_equal(twice.points, out.points)
+
+
+def test_hilbert_key_walks_a_grid_one_neighbour_at_a_time():
+    """The defining property of a Hilbert curve: on a 2^k × 2^k grid the keys
+    are 0 … 4^k − 1 and cells with consecutive keys share a side."""
+    from fdem.mesh import _hilbert_key
+
+    g = np.arange(16.0)
+    cells = np.array([[x, y] for x in g for y in g])
+    key = _hilbert_key(cells, bits=4)
+    assert sorted(key.tolist()) == list(range(256))
+    path = cells[np.argsort(key)]
+    assert np.all(np.abs(np.diff(path, axis=0)).sum(axis=1) == 1.0)

@@ -188,7 +188,7 @@ class Mesh:
         forces; with neighbours stored near each other those reads hit the
         cache. Measured on the 135 672-element block-caving mesh (2 threads):
         the whole step 1.38× faster than in the generator's order
-        (docs/performance.md). Coincident nodes keep their relative order,
+        (ARCHITECTURE.md, measured facts). Coincident nodes keep their order,
         so the result is deterministic. The generators of unstructured
         meshes (:meth:`polygon`, :func:`fdem.jointed_rectangle`) return
         reordered meshes; call it on meshes read from files.
