@@ -145,7 +145,7 @@ impl FacetFrame {
 /// Every facet's [`FacetFrame`] at positions `x` (parallel over fixed
 /// chunks), once per contact evaluation: the candidate tests, node normals
 /// and tributary lengths read them instead of recomputing a square root per
-/// use (measured: each facet was measured 5–6 times per step).
+/// use (each facet's frame was computed 5–6 times per step before).
 pub fn facet_frames(surface: &Surface, x: &[Vec2], frames: &mut [FacetFrame]) {
     frames.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
         for (j, fr) in out.iter_mut().enumerate() {
