@@ -88,8 +88,8 @@ pub(crate) fn resolve_pressures(
 ) -> Result<Vec<PressureFacet>, String> {
     // only the loaded pairs are looked for: a few hundred loads against
     // the whole surface (every joint and crack face), at every insertion
-    let mut by_pair: BTreeMap<(u32, u32), Vec<[u32; 2]>> =
-        loads.iter().map(|p| ((p.nodes[0].min(p.nodes[1]), p.nodes[0].max(p.nodes[1])), Vec::new())).collect();
+    let key = |[a, b]: [u32; 2]| (a.min(b), a.max(b));
+    let mut by_pair: BTreeMap<(u32, u32), Vec<[u32; 2]>> = loads.iter().map(|p| (key(p.nodes), Vec::new())).collect();
     for f in &surface.facets {
         if let Some(list) = by_pair.get_mut(&ancestor_pair(ancestor, f.nodes[0], f.nodes[1])) {
             list.push(f.nodes);
@@ -98,7 +98,7 @@ pub(crate) fn resolve_pressures(
     let mut out = Vec::with_capacity(loads.len());
     for p in loads {
         let [a, b] = p.nodes;
-        match by_pair.get(&(a.min(b), a.max(b))) {
+        match by_pair.get(&key(p.nodes)) {
             Some(list) if !list.is_empty() => {
                 for &nodes in list {
                     let bnodes = nodes.map(|n| surface.index_of[n as usize]);
