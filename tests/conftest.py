@@ -24,15 +24,16 @@ def perturbed_rectangle(
     return fdem.Mesh(pts, base.triangles, facet_sets=dict(base.facet_sets), node_sets=dict(base.node_sets))
 
 
-def assembled_critical_step(mesh: fdem.Mesh, mat: fdem.Elastic) -> float:
+def assembled_critical_step(mesh: fdem.Mesh, mat: fdem.Elastic, scale: np.ndarray | None = None) -> float:
     """True critical step 2/ω_max of the assembled lumped system, built here
-    independently of the kernel (dense numpy, free-free)."""
+    independently of the kernel (dense numpy, free-free); ``scale`` is an
+    optional density factor per element (mass scaling)."""
     n = mesh.n_nodes
     lam, mu = mat.lame_lambda, mat.shear_modulus
     c = np.array([[lam + 2 * mu, lam, 0], [lam, lam + 2 * mu, 0], [0, 0, mu]])
     k = np.zeros((2 * n, 2 * n))
     m = np.zeros(2 * n)
-    for tri in mesh.triangles:
+    for e, tri in enumerate(mesh.triangles):
         x = mesh.points[tri]
         area = 0.5 * ((x[1, 0] - x[0, 0]) * (x[2, 1] - x[0, 1]) - (x[2, 0] - x[0, 0]) * (x[1, 1] - x[0, 1]))
         b = np.zeros((3, 6))
@@ -42,7 +43,7 @@ def assembled_critical_step(mesh: fdem.Mesh, mat: fdem.Elastic) -> float:
             b[0, 2 * a], b[1, 2 * a + 1], b[2, 2 * a], b[2, 2 * a + 1] = gx, gy, gy, gx
         dofs = np.ravel([[2 * v, 2 * v + 1] for v in tri])
         k[np.ix_(dofs, dofs)] += area * b.T @ c @ b
-        m[dofs] += mat.rho * area / 3
+        m[dofs] += mat.rho * (1.0 if scale is None else scale[e]) * area / 3
     s = 1 / np.sqrt(m)
     w2 = np.linalg.eigvalsh(s[:, None] * k * s[None, :]).max()
     return float(2 / np.sqrt(w2))

@@ -34,6 +34,7 @@ def small_caving(threads: int) -> fdem.Simulation:
     case = eval(CASE, {"CavingCase": CavingCase})
     sim = fdem.Simulation(caving_model(case), threads=threads, stiffness_damping=2e-6)
     sim.equilibrate(max_velocity=1e-3)
+    sim.configure(mass_scaling=0.8 * sim.time_step)  # as run_caving does
     return sim
 
 
@@ -46,6 +47,8 @@ def state(sim: fdem.Simulation) -> dict[str, np.ndarray]:
         "tri": sim.triangles(),
         "active": sim.active(),
         "kappa": sim.element_state()["kappa"],
+        "mass": sim.masses(),
+        "mass_scale": sim.mass_scale(),
         "contacts": sim.contacts()["normal_force"],
         "bonds": sim.bonds()["max_opening"],
         "energies": np.array([e[k] for k in sorted(e)]),
@@ -72,6 +75,7 @@ def test_restart_in_a_new_process_on_another_thread_count_is_bit_for_bit(tmp_pat
     assert sim.stages_done >= 2 and sim.insertions > 0
     sim.run(0.16, output_every=0.04, output=out, name="run", progress=False)
     assert sim.insertions > 200 and sim.stages_done >= 4, (sim.insertions, sim.stages_done)
+    assert sim.added_mass > 0  # the scaled path, checkpointed mid-way
     reference = state(sim)
     frames_a = frames_listed(out / "run.pvd")
 
@@ -170,6 +174,7 @@ def test_the_energy_audit_is_a_csv_per_frame_with_a_warning_and_an_optional_stop
             "remeshing",
             "resurfacing",
             "excavated",
+            "mass_scaling",
         )
     )
     assert np.allclose(supplied - held - lost, e["residual"], rtol=0, atol=1e-12 * np.abs(supplied).max())

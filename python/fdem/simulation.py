@@ -51,6 +51,19 @@ class Simulation:
         energy balance shows more energy created than this fraction of its
         largest term (checked every 50 steps; an unstable run grows
         exponentially and is caught within those). 0 turns it off.
+    mass_scaling : float, optional
+        Selective mass scaling: the time step Δt (s) to hold. Where an
+        element, or a contact node with its penalty springs, would need a
+        shorter step than ``mass_scaling / safety``, the density of its
+        elements is raised by the factor that makes it meet that step, no
+        more (LS-DYNA's DT2MS idea). Masses are only raised at set-up, at
+        settings changes and when the topology changes (cracks,
+        excavation); a mass raised during the run keeps the node's
+        momentum, and the kinetic energy this takes is the ``mass_scaling``
+        term of :meth:`energies`. Added mass is real mass: gravity acts on
+        it. :meth:`added_mass` and :meth:`mass_scale` report where and how
+        much (docs/mass_scaling.md). ``None`` (default): every mass is
+        physical.
 
     Raises
     ------
@@ -70,13 +83,16 @@ class Simulation:
         stiffness_damping: float = 0.0,
         dt_interval: int = 100,
         energy_growth: float = 0.1,
+        mass_scaling: float | None = None,
     ) -> None:
         if not isinstance(model, Model):
             raise ValueError(f"model must be a fdem.Model, got {type(model).__name__}")
         if threads is not None:
             threads = whole("threads", threads, maximum=4096)
         self.model = model
-        self._settings = self._check_settings(safety, dt, mass_damping, stiffness_damping, dt_interval, energy_growth)
+        self._settings = self._check_settings(
+            safety, dt, mass_damping, stiffness_damping, dt_interval, energy_growth, mass_scaling
+        )
         arrays = model.kernel_arrays()
         self._fingerprint = _fingerprint(arrays)
         self._core = _core.Simulation(**arrays, **self._settings, threads=int(threads or 0))
@@ -84,7 +100,9 @@ class Simulation:
         self._resume: dict[tuple[str, str], dict[str, Any]] = {}
 
     @staticmethod
-    def _check_settings(safety: Any, dt: Any, alpha: Any, beta: Any, interval: Any, growth: Any) -> dict[str, Any]:
+    def _check_settings(
+        safety: Any, dt: Any, alpha: Any, beta: Any, interval: Any, growth: Any, scaling: Any
+    ) -> dict[str, Any]:
         s = number("safety", safety)
         if not 0 < s <= 1:
             raise ValueError(f"safety = {s} must lie in (0, 1]")
@@ -95,13 +113,16 @@ class Simulation:
             "stiffness_damping": positive("stiffness_damping", beta, allow_zero=True),
             "dt_interval": whole("dt_interval", interval),
             "energy_growth": positive("energy_growth", growth, allow_zero=True),
+            "mass_scaling": None if scaling is None else positive("mass_scaling", scaling),
         }
 
     def configure(self, **changes: Any) -> Simulation:
         """Changes run settings between stages (``safety``, ``dt``,
         ``mass_damping``, ``stiffness_damping``, ``dt_interval``,
-        ``energy_growth``)."""
-        known = {"safety", "dt", "mass_damping", "stiffness_damping", "dt_interval", "energy_growth"}
+        ``energy_growth``, ``mass_scaling``). Turning mass scaling on, or
+        raising its step, scales masses at once; turning it off keeps the
+        masses added so far."""
+        known = {"safety", "dt", "mass_damping", "stiffness_damping", "dt_interval", "energy_growth", "mass_scaling"}
         unknown = set(changes) - known
         if unknown:
             raise ValueError(f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
@@ -115,6 +136,7 @@ class Simulation:
             cur["stiffness_damping"],
             cur["dt_interval"],
             cur["energy_growth"],
+            cur["mass_scaling"],
         )
         self._core.set_settings(**self._settings)
         return self
@@ -180,8 +202,21 @@ class Simulation:
         return self._core.triangles()
 
     def masses(self) -> NDArray[np.float64]:
-        """Lumped nodal masses (kg per unit thickness)."""
+        """Lumped nodal masses (kg per unit thickness), the ones the
+        equation of motion uses: with mass scaling, physical plus added."""
         return self._core.masses()
+
+    def mass_scale(self) -> NDArray[np.float64]:
+        """Each element's density factor from mass scaling (1 where its
+        mass is physical)."""
+        return self._core.mass_scale()
+
+    @property
+    def added_mass(self) -> float:
+        """Mass added by mass scaling to the active elements, ``Σ (s_e − 1)
+        ρ_e A_e`` (kg per unit thickness); :meth:`masses` sums to the
+        physical mass plus this."""
+        return float(self._core.added_mass())
 
     def areas(self) -> NDArray[np.float64]:
         """Current element areas (m²)."""

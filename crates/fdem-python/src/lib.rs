@@ -187,7 +187,7 @@ impl PySimulation {
         contact_laws=None, contact_facets=None, contact_facet_laws=None, crack_law=0, contact_margin=None,
         fracture_interval=0, fracture_edge_tolerance=15.0, fracture_crack_tolerance=30.0, fracture_min_quality=0.2, fracture_min_altitude=0.0, fracture_insert_at=0.02,
         stage_times=Vec::new(), stage_elements=Vec::new(),
-        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.1, threads=0
+        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.1, mass_scaling=None, threads=0
     ))]
     fn new(
         points: PyReadonlyArray2<'_, f64>,
@@ -225,6 +225,7 @@ impl PySimulation {
         fixed_dt: Option<f64>,
         dt_interval: u32,
         energy_growth: f64,
+        mass_scaling: Option<f64>,
         threads: usize,
     ) -> PyResult<Self> {
         guard(|| {
@@ -360,7 +361,15 @@ impl PySimulation {
                     }
                     stages
                 },
-                settings: Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth },
+                settings: Settings {
+                    mass_damping,
+                    stiffness_damping,
+                    safety,
+                    fixed_dt,
+                    dt_interval,
+                    energy_growth,
+                    mass_scaling,
+                },
             };
             let sim = fdem_solver::Simulation::new(spec, threads).map_err(|e| value_error(e.to_string()))?;
             Ok(PySimulation { sim, poisoned: false })
@@ -466,7 +475,8 @@ impl PySimulation {
     }
 
     /// Replaces the run settings between stages.
-    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth=0.1))]
+    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth=0.1, mass_scaling=None))]
+    #[allow(clippy::too_many_arguments)]
     fn set_settings(
         &mut self,
         mass_damping: f64,
@@ -475,10 +485,19 @@ impl PySimulation {
         fixed_dt: Option<f64>,
         dt_interval: u32,
         energy_growth: f64,
+        mass_scaling: Option<f64>,
     ) -> PyResult<()> {
         guard(|| {
             self.ok()?;
-            let s = Settings { mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth };
+            let s = Settings {
+                mass_damping,
+                stiffness_damping,
+                safety,
+                fixed_dt,
+                dt_interval,
+                energy_growth,
+                mass_scaling,
+            };
             self.sim.set_settings(s).map_err(|e| value_error(e.to_string()))
         })
     }
@@ -619,6 +638,17 @@ impl PySimulation {
     /// Lumped nodal masses (kg per unit thickness), a copy.
     fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         self.sim.masses().to_vec().into_pyarray(py)
+    }
+
+    /// Every element's mass-scaling density factor (1: physical), a copy.
+    fn mass_scale<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.sim.mass_scale().to_vec().into_pyarray(py)
+    }
+
+    /// Mass added by mass scaling to the active elements (kg per unit
+    /// thickness).
+    fn added_mass(&self) -> f64 {
+        self.sim.added_mass()
     }
 
     /// Current element areas (m²).
@@ -776,6 +806,7 @@ impl PySimulation {
             d.set_item("resurfacing", e.resurfacing)?;
             d.set_item("cohesive_elastic", e.cohesive_elastic)?;
             d.set_item("excavated", e.excavated)?;
+            d.set_item("mass_scaling", e.mass_scaling)?;
             d.set_item("residual", e.residual())?;
             d.set_item("largest_term", e.largest_term())?;
             Ok(d)

@@ -48,8 +48,9 @@ use fdem_mesh::Csr;
 
 /// The first eight bytes of every checkpoint file.
 pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
-/// The checkpoint format this build writes; it reads this one and older.
-pub const FORMAT_VERSION: u32 = 1;
+/// The checkpoint format this build writes and reads (2: elements carry
+/// mass-scaling factors; older files are refused with a clear message).
+pub const FORMAT_VERSION: u32 = 2;
 const HEADER: usize = 40;
 
 /// Why a checkpoint could not be written or read.
@@ -229,6 +230,13 @@ impl Simulation {
         if version == 0 {
             return Err(CheckpointError::Corrupted("format version 0".into()));
         }
+        if version < FORMAT_VERSION {
+            // format 2 added the elements' mass-scaling factors
+            return Err(CheckpointError::Invalid(format!(
+                "format version {version} was written by an older fdem; this build reads format {FORMAT_VERSION} \
+                 only: rerun from the model"
+            )));
+        }
         let (s_len, u_len) = (le_u64(&bytes[16..24]), le_u64(&bytes[24..32]));
         let expected = (HEADER as u64).saturating_add(s_len).saturating_add(u_len);
         let found = bytes.len() as u64;
@@ -294,9 +302,15 @@ fn check_consistent(s: &StateOwned) -> Result<(), CheckpointError> {
     if !nodes_ok {
         return bad(format!("node arrays disagree on the node count ({n})"));
     }
-    let elems_ok = [s.elems.reference.len(), s.elems.material.len(), s.elems.active.len(), s.elems.stress.len()]
-        .iter()
-        .all(|&k| k == m)
+    let elems_ok = [
+        s.elems.reference.len(),
+        s.elems.material.len(),
+        s.elems.active.len(),
+        s.elems.stress.len(),
+        s.elems.mass_scale.len(),
+    ]
+    .iter()
+    .all(|&k| k == m)
         && s.elems.state.len() == m
         && s.elems.force.len() == 3 * m
         && s.omega.len() == m;
@@ -305,6 +319,12 @@ fn check_consistent(s: &StateOwned) -> Result<(), CheckpointError> {
     }
     if let Some(e) = s.elems.conn.iter().position(|t| t.iter().any(|&v| v as usize >= n)) {
         return bad(format!("element {e} refers to a missing node"));
+    }
+    if let Some(e) = s.elems.mass_scale.iter().position(|&f| !(f >= 1.0 && f.is_finite())) {
+        return bad(format!(
+            "element {e} has a mass-scaling factor {} (must be finite and >= 1)",
+            s.elems.mass_scale[e]
+        ));
     }
     if let Some(e) = s.elems.material.iter().position(|&k| k as usize >= s.materials.len()) {
         return bad(format!("element {e} refers to a missing material"));

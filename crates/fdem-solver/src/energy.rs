@@ -55,6 +55,10 @@ pub struct Energies {
     /// removed elements, the kinetic energy of the mass that left with them,
     /// and the elastic energy of bonds to nodes that left.
     pub excavated: f64,
+    /// Kinetic energy taken by selective mass scaling: a node whose mass
+    /// is raised during the run keeps its momentum, so its kinetic energy
+    /// drops by `(1 − m_old/m_new)` (an inelastic accretion; ≥ 0).
+    pub mass_scaling: f64,
     /// Work done on the nodes by contact and bond forces (a diagnostic:
     /// ideally `−(contact_elastic + friction + contact_damping +
     /// cohesive_elastic + bond dissipation)`).
@@ -94,6 +98,7 @@ impl Energies {
             self.remeshing,
             self.resurfacing,
             self.excavated,
+            self.mass_scaling,
         ]
         .iter()
         .fold(0.0, |m, t| m.max(t.abs()))
@@ -102,7 +107,8 @@ impl Energies {
     /// Everything dissipated, held outside the elements, or taken out so
     /// far: damping, plastic flow, fracture, friction, contact damping, the
     /// energy in contact springs and bonds, remeshing losses, energy held in
-    /// contacts released by re-forming them at insertions, excavation.
+    /// contacts released by re-forming them at insertions, excavation, mass
+    /// scaling.
     pub fn dissipated(&self) -> f64 {
         self.mass_damping
             + self.viscous_damping
@@ -115,6 +121,7 @@ impl Energies {
             + self.remeshing
             + self.resurfacing
             + self.excavated
+            + self.mass_scaling
     }
 }
 

@@ -54,8 +54,19 @@ impl Simulation {
         }
         self.refresh_forces();
         self.keep_whole_step_velocities(&v_n);
-        self.update_time_step();
         let after = self.energies();
+        self.energies.excavated += self.keep_work_continuous(&before, &after);
+        // after the booking: mass scaling books its own change
+        self.update_time_step();
+        Ok(remove.len())
+    }
+
+    /// After an instantaneous change of the model at the whole step `tⁿ`
+    /// (`before` and `after` it): keeps the reported work terms (whose
+    /// pending half-step parts depend on nodal masses and forces)
+    /// continuous, and returns the held energy (kinetic, elastic, contact
+    /// and bond springs) the change took away, for the caller to book.
+    pub(crate) fn keep_work_continuous(&mut self, before: &Energies, after: &Energies) -> f64 {
         let held = |e: &Energies| e.kinetic + e.elastic + e.contact_elastic + e.cohesive_elastic;
         let acc = &mut self.energies;
         acc.external_work += before.external_work - after.external_work;
@@ -63,8 +74,7 @@ impl Simulation {
         acc.mass_damping += before.mass_damping - after.mass_damping;
         acc.contact_work += before.contact_work - after.contact_work;
         acc.contact_damping += before.contact_damping - after.contact_damping;
-        acc.excavated += held(&before) - held(&after);
-        Ok(remove.len())
+        held(before) - held(after)
     }
 
     /// Runs the stages that are due at the current time; returns whether

@@ -262,7 +262,7 @@ impl Simulation {
         touched.dedup();
         self.refresh_forces_of(&touched);
         self.energies.resurfacing += held_before - held(&self.energies);
-        self.update_time_step_for(Some(&touched));
+        self.update_time_step_for(Some(&touched), true);
         // the rebuild's surface forces and stable step count as topology
         let pt = &mut self.phase_times;
         (pt.surface, pt.broad_phase, pt.time_step) = inner;
@@ -423,6 +423,7 @@ impl Simulation {
             self.elems.material.push(self.elems.material[p]);
             self.elems.active.push(self.elems.active[p]);
             self.elems.stress.push(self.elems.stress[p]);
+            self.elems.mass_scale.push(self.elems.mass_scale[p]);
             self.elems.state.push(self.elems.state[p]);
             self.elems.reference.push(self.elems.reference[p]);
         }

@@ -59,6 +59,12 @@ pub struct Settings {
     /// [`ENERGY_CHECK_INTERVAL`](crate::ENERGY_CHECK_INTERVAL) steps); 0
     /// turns the check off.
     pub energy_growth: f64,
+    /// Selective mass scaling: the time step `Δt` (s, after the safety
+    /// factor) to hold. Where an element or a contact node would need a
+    /// shorter step, its elements' density is raised by the factor that
+    /// makes it meet `Δt / safety` (docs/mass_scaling.md); `None` leaves
+    /// every mass physical.
+    pub mass_scaling: Option<f64>,
 }
 
 impl Default for Settings {
@@ -70,6 +76,7 @@ impl Default for Settings {
             fixed_dt: None,
             dt_interval: 100,
             energy_growth: 0.1,
+            mass_scaling: None,
         }
     }
 }

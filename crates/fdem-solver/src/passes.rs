@@ -289,13 +289,15 @@ pub(crate) fn element_forces_of(inp: &ElementInputs<'_>, elems: &[u32], stress: 
     }
 }
 
-/// `ω_e` of the listed elements into `omega` (0 for inactive ones).
-pub(crate) fn element_frequencies_of(inp: &ElementInputs<'_>, elems: &[u32], omega: &mut [f64]) {
+/// `ω_e` of the listed elements into `omega` (0 for inactive ones), with
+/// their density times their mass-scaling factor `scale`.
+pub(crate) fn element_frequencies_of(inp: &ElementInputs<'_>, scale: &[f64], elems: &[u32], omega: &mut [f64]) {
     for &e in elems {
         let e = e as usize;
         omega[e] = if inp.active[e] {
             let mat = &inp.materials[inp.material[e] as usize];
-            max_frequency(&gather(inp.x, inp.conn[e]), mat.elastic.lambda, mat.elastic.mu, mat.density)
+            let rho = mat.density * scale[e];
+            max_frequency(&gather(inp.x, inp.conn[e]), mat.elastic.lambda, mat.elastic.mu, rho)
         } else {
             0.0
         };
@@ -318,11 +320,12 @@ pub(crate) fn critical_from_frequencies(omega: &[f64], beta: f64) -> f64 {
         .reduce(|| f64::INFINITY, |a, b| if b < a || a.is_nan() { b } else { a })
 }
 
-/// Highest frequency `ω_e` of every active element (0 for inactive ones)
-/// into `omega`, and the smallest critical step `2/ω_e` reduced for
-/// stiffness damping (s), before the safety factor. `min` is exact and
-/// order-independent, so the result does not depend on the thread count.
-pub(crate) fn element_frequencies(inp: &ElementInputs<'_>, omega: &mut [f64]) -> f64 {
+/// Highest frequency `ω_e` of every active element (0 for inactive ones),
+/// with its density times its mass-scaling factor `scale`, into `omega`,
+/// and the smallest critical step `2/ω_e` reduced for stiffness damping
+/// (s), before the safety factor. `min` is exact and order-independent, so
+/// the result does not depend on the thread count.
+pub(crate) fn element_frequencies(inp: &ElementInputs<'_>, scale: &[f64], omega: &mut [f64]) -> f64 {
     omega
         .par_iter_mut()
         .enumerate()
@@ -334,7 +337,7 @@ pub(crate) fn element_frequencies(inp: &ElementInputs<'_>, omega: &mut [f64]) ->
             }
             let mat = &inp.materials[inp.material[e] as usize];
             let x = gather(inp.x, inp.conn[e]);
-            *w = max_frequency(&x, mat.elastic.lambda, mat.elastic.mu, mat.density);
+            *w = max_frequency(&x, mat.elastic.lambda, mat.elastic.mu, mat.density * scale[e]);
             let xi = 0.5 * inp.beta * *w;
             2.0 / *w * ((1.0 + xi * xi).sqrt() - xi)
         })

@@ -68,6 +68,29 @@ impl Simulation {
         &self.nodes.mass
     }
 
+    /// Every element's density factor from selective mass scaling (1 where
+    /// its mass is physical; see [`Settings::mass_scaling`](crate::Settings)).
+    pub fn mass_scale(&self) -> &[f64] {
+        &self.elems.mass_scale
+    }
+
+    /// Mass added by selective mass scaling to the active elements,
+    /// `Σ (s_e − 1) ρ_e A_e` over reference areas (kg per unit thickness):
+    /// the nodal masses sum to the physical mass plus this.
+    pub fn added_mass(&self) -> f64 {
+        let mut added = 0.0;
+        for (e, t) in self.elems.conn.iter().enumerate() {
+            let s = self.elems.mass_scale[e];
+            if !self.elems.active[e] || s == 1.0 {
+                continue;
+            }
+            let x = [self.nodes.x0[t[0] as usize], self.nodes.x0[t[1] as usize], self.nodes.x0[t[2] as usize]];
+            added +=
+                (s - 1.0) * self.materials[self.elems.material[e] as usize].density * fdem_element::signed_area(&x);
+        }
+        added
+    }
+
     /// The material index of every element (pieces of a split element
     /// keep their parent's).
     pub fn element_materials(&self) -> &[u32] {
@@ -90,7 +113,7 @@ impl Simulation {
     /// The whole-step velocity of node `i` (see [`Self::velocities`]),
     /// without allocating: the energy watchdog evaluates it inside the
     /// time loop.
-    fn whole_step_velocity(&self, i: usize) -> Vec2 {
+    pub(crate) fn whole_step_velocity(&self, i: usize) -> Vec2 {
         let h = 0.5 * self.dt_prev;
         let m = self.nodes.mass[i];
         let mut v = self.nodes.v[i];
@@ -123,20 +146,28 @@ impl Simulation {
         if h == 0.0 {
             return;
         }
+        for (i, &vn) in v_n.iter().enumerate() {
+            self.set_whole_step_velocity(i, vn);
+        }
+    }
+
+    /// Sets node `i`'s half-step velocity so that its whole-step velocity
+    /// under the current forces is `vn` (see
+    /// [`Self::keep_whole_step_velocities`]).
+    pub(crate) fn set_whole_step_velocity(&mut self, i: usize, vn: Vec2) {
+        let h = 0.5 * self.dt_prev;
+        let m = self.nodes.mass[i];
+        if h == 0.0 || m <= 0.0 {
+            return;
+        }
         let denom = 1.0 + self.settings.mass_damping * h;
-        for (i, vn) in v_n.iter().enumerate() {
-            let m = self.nodes.mass[i];
-            if m <= 0.0 {
+        let f = self.net_force(i);
+        let b = self.nodes.bc[i];
+        for d in 0..2 {
+            if b != NO_BC && self.constraints[b as usize].fixed[d] {
                 continue;
             }
-            let f = self.net_force(i);
-            let b = self.nodes.bc[i];
-            for d in 0..2 {
-                if b != NO_BC && self.constraints[b as usize].fixed[d] {
-                    continue;
-                }
-                self.nodes.v[i][d] = vn[d] * denom - h * f[d] / m;
-            }
+            self.nodes.v[i][d] = vn[d] * denom - h * f[d] / m;
         }
     }
 
@@ -320,6 +351,48 @@ impl Simulation {
             .sum()
     }
 
+    /// Node `i`'s share of the energy account at the current whole step:
+    /// `[kinetic, external, support, mass damping, contact, contact
+    /// damping]`, the last five the pending second halves of the work of
+    /// the last step (see [`Self::energies`]).
+    pub(crate) fn node_energy_terms(&self, i: usize) -> [f64; 6] {
+        let h = 0.5 * self.dt_prev;
+        let alpha = self.settings.mass_damping;
+        let g = self.gravity;
+        let m = self.nodes.mass[i];
+        let v = self.whole_step_velocity(i);
+        let kinetic = 0.5 * m * (v[0] * v[0] + v[1] * v[1]);
+        if m <= 0.0 || h == 0.0 {
+            return [kinetic, 0.0, 0.0, 0.0, 0.0, 0.0];
+        }
+        let half = self.nodes.v[i];
+        let dx = [h * half[0], h * half[1]];
+        let (p, c) = self.surface_force(i);
+        let external = (m * g[0] + p[0]) * dx[0] + (m * g[1] + p[1]) * dx[1];
+        let contact = c[0] * dx[0] + c[1] * dx[1];
+        let mut contact_damping = 0.0;
+        let bn = self.surface.index_of[i];
+        if bn != NONE {
+            if let Some(fd) = self.contact_damping_force.get(bn as usize) {
+                contact_damping = -(fd[0] * dx[0] + fd[1] * dx[1]);
+            }
+        }
+        let damping = alpha * m * (v[0] * dx[0] + v[1] * dx[1]);
+        let mut support = 0.0;
+        let b = self.nodes.bc[i];
+        if b != NO_BC {
+            let f = self.net_force(i);
+            let c = &self.constraints[b as usize];
+            for d in 0..2 {
+                if c.fixed[d] {
+                    let reaction = m * (v[d] - half[d]) / h + alpha * m * v[d] - f[d];
+                    support += reaction * dx[d];
+                }
+            }
+        }
+        [kinetic, external, support, damping, contact, contact_damping]
+    }
+
     /// The energy account at the current step.
     ///
     /// The accumulated work pairs the force of step `n` with the centred
@@ -327,11 +400,7 @@ impl Simulation {
     /// half of the last displacement is still pending and is added here, so
     /// that the account matches the whole-step kinetic energy.
     pub fn energies(&self) -> Energies {
-        let h = 0.5 * self.dt_prev;
-        let alpha = self.settings.mass_damping;
-        let g = self.gravity;
-        let (mut external, mut support, mut damping, mut contact, mut contact_damping) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        let mut kinetic = 0.0;
+        let mut sum = [0.0; 6];
         let n = self.n_nodes();
         // nodes by chunks, so the kinetic energy is summed as in
         // `kinetic_energy`, in one pass and without allocating (the energy
@@ -339,38 +408,15 @@ impl Simulation {
         for chunk in 0..n.div_ceil(CHUNK) {
             let mut kinetic_chunk = 0.0;
             for i in chunk * CHUNK..n.min((chunk + 1) * CHUNK) {
-                let m = self.nodes.mass[i];
-                let v = self.whole_step_velocity(i);
-                kinetic_chunk += 0.5 * m * (v[0] * v[0] + v[1] * v[1]);
-                if m <= 0.0 || h == 0.0 {
-                    continue;
-                }
-                let half = self.nodes.v[i];
-                let dx = [h * half[0], h * half[1]];
-                let (p, c) = self.surface_force(i);
-                external += (m * g[0] + p[0]) * dx[0] + (m * g[1] + p[1]) * dx[1];
-                contact += c[0] * dx[0] + c[1] * dx[1];
-                let bn = self.surface.index_of[i];
-                if bn != NONE {
-                    if let Some(fd) = self.contact_damping_force.get(bn as usize) {
-                        contact_damping -= fd[0] * dx[0] + fd[1] * dx[1];
-                    }
-                }
-                damping += alpha * m * (v[0] * dx[0] + v[1] * dx[1]);
-                let b = self.nodes.bc[i];
-                if b != NO_BC {
-                    let f = self.net_force(i);
-                    let c = &self.constraints[b as usize];
-                    for d in 0..2 {
-                        if c.fixed[d] {
-                            let reaction = m * (v[d] - half[d]) / h + alpha * m * v[d] - f[d];
-                            support += reaction * dx[d];
-                        }
-                    }
+                let t = self.node_energy_terms(i);
+                kinetic_chunk += t[0];
+                for k in 1..6 {
+                    sum[k] += t[k];
                 }
             }
-            kinetic += kinetic_chunk;
+            sum[0] += kinetic_chunk;
         }
+        let [kinetic, external, support, damping, contact, contact_damping] = sum;
         Energies {
             kinetic,
             elastic: self.elastic_energy(),

@@ -251,6 +251,7 @@ impl Simulation {
                 material: spec.element_material,
                 active,
                 stress,
+                mass_scale: vec![1.0; m],
                 state: vec![PlasticState::default(); m],
                 force: vec![[0.0; 2]; 3 * m],
             },

@@ -40,6 +40,8 @@ pub(crate) struct Elements {
     pub active: Vec<bool>,
     /// Co-rotational Cauchy stress `σ̂` (Pa).
     pub stress: Vec<[f64; 4]>,
+    /// Density factor of selective mass scaling (1: physical mass).
+    pub mass_scale: Vec<f64>,
     /// Plastic state (unused for elastic materials).
     pub state: Vec<PlasticState>,
     /// Internal nodal forces at `xⁿ`, three per element (N).
@@ -261,18 +263,39 @@ impl Simulation {
     /// `2/√(ω_e² + ω_c²)` with `ω_c² = 4 k ℓ / m` (a node's contact spring
     /// is the stiffness k times its tributary length ℓ; two-pass contact
     /// doubles it, a free partner node doubles the relative frequency²),
-    /// reduced for the contact dashpot; or the fixed step.
+    /// reduced for the contact dashpot; or the fixed step. With mass
+    /// scaling on, first raises the masses that would need a shorter step
+    /// than the target ([`Self::scale_masses`]).
     pub fn update_time_step(&mut self) {
-        self.update_time_step_for(None);
+        self.update_time_step_for(None, true);
     }
 
     /// [`Self::update_time_step`], re-evaluating only the listed elements'
     /// frequencies (the others are unchanged since the last evaluation) when
-    /// `touched` is given: after a topology change.
-    pub(crate) fn update_time_step_for(&mut self, touched: Option<&[u32]>) {
+    /// `touched` is given: after a topology change. `rescale` allows mass
+    /// scaling (at set-up, settings changes and topology changes; the
+    /// periodic re-evaluation in the time loop never changes masses).
+    pub(crate) fn update_time_step_for(&mut self, touched: Option<&[u32]>, rescale: bool) {
         let clock = Instant::now();
+        let mut crit = self.critical_step(touched);
+        if let (true, Some(target), None) = (rescale, self.settings.mass_scaling, self.settings.fixed_dt) {
+            if self.settings.safety * crit < target {
+                let changed = self.scale_masses(target / self.settings.safety);
+                if !changed.is_empty() {
+                    crit = self.critical_step(Some(&changed));
+                }
+            }
+        }
+        self.dt_critical = crit;
+        self.dt = self.settings.fixed_dt.unwrap_or(self.settings.safety * crit);
+        self.phase_times.time_step += clock.elapsed().as_secs_f64();
+    }
+
+    /// The critical step before the safety factor (s), updating the stored
+    /// element frequencies (all, or the listed elements').
+    fn critical_step(&mut self, touched: Option<&[u32]>) -> f64 {
         let pool = Arc::clone(&self.pool);
-        let crit = pool.install(|| {
+        pool.install(|| {
             let Simulation { nodes, elems, omega, .. } = self;
             let inp = ElementInputs {
                 x: &nodes.x,
@@ -287,32 +310,17 @@ impl Simulation {
                 plastic: !self.elastic_stage,
             };
             let mut crit = match touched {
-                None => passes::element_frequencies(&inp, omega),
+                None => passes::element_frequencies(&inp, &elems.mass_scale, omega),
                 Some(list) => {
-                    passes::element_frequencies_of(&inp, list, omega);
+                    passes::element_frequencies_of(&inp, &elems.mass_scale, list, omega);
                     passes::critical_from_frequencies(omega, self.settings.stiffness_damping)
                 }
             };
             if let Some(contact) = &self.contact {
-                for (b, &node) in self.surface.nodes.iter().enumerate() {
-                    let m = self.nodes.mass[node as usize];
-                    if m <= 0.0 {
-                        continue;
+                for b in 0..self.surface.nodes.len() {
+                    if let Some((w, r)) = self.contact_node_frequency(contact, b) {
+                        crit = crit.min(2.0 * r / w);
                     }
-                    let we = self
-                        .node_elems
-                        .row(node as usize)
-                        .iter()
-                        .map(|&i| self.omega[(i / 3) as usize])
-                        .fold(0.0, f64::max);
-                    // a node's contact spring is k ℓ (ℓ its tributary length);
-                    // two-pass contact doubles it and a free partner node
-                    // doubles the relative frequency²: 2kℓ (1/m1 + 1/m2) ≤ 4kℓ/m
-                    // at the lighter node, so 4kℓ/m at each node covers all pairs
-                    let wc2 = 4.0 * contact.max_stiffness * self.surface.tributary_max(b) / m;
-                    let w = (we * we + wc2).sqrt();
-                    let xi = contact.max_damping * wc2.sqrt() / w;
-                    crit = crit.min(2.0 / w * ((1.0 + xi * xi).sqrt() - xi));
                 }
             }
             if let Some(fr) = &self.fracture {
@@ -326,8 +334,7 @@ impl Simulation {
                         continue;
                     }
                     let node_w2 = |v: usize, m: f64| {
-                        let we =
-                            self.node_elems.row(v).iter().map(|&i| self.omega[(i / 3) as usize]).fold(0.0, f64::max);
+                        let we = self.node_frequency(v);
                         let bi = self.surface.index_of[v];
                         let wc2 = if bi == crate::NONE {
                             0.0
@@ -342,10 +349,122 @@ impl Simulation {
                 }
             }
             crit
-        });
-        self.dt_critical = crit;
-        self.dt = self.settings.fixed_dt.unwrap_or(self.settings.safety * crit);
-        self.phase_times.time_step += clock.elapsed().as_secs_f64();
+        })
+    }
+
+    /// The highest frequency among node `v`'s elements (rad/s).
+    fn node_frequency(&self, v: usize) -> f64 {
+        self.node_elems.row(v).iter().map(|&i| self.omega[(i / 3) as usize]).fold(0.0, f64::max)
+    }
+
+    /// Boundary node `b`'s frequency with its contact springs, `ω =
+    /// √(ω_e² + ω_c²)`, and the factor `√(1 + ξ²) − ξ` by which the contact
+    /// dashpot (damping ratio ξ of the contact part) shortens its step; its
+    /// critical step is `2 · factor / ω`. `None` for a node without mass.
+    fn contact_node_frequency(&self, contact: &ContactModel, b: usize) -> Option<(f64, f64)> {
+        let node = self.surface.nodes[b] as usize;
+        let m = self.nodes.mass[node];
+        if m <= 0.0 {
+            return None;
+        }
+        let we = self.node_frequency(node);
+        // a node's contact spring is k ℓ (ℓ its tributary length); two-pass
+        // contact doubles it and a free partner node doubles the relative
+        // frequency²: 2kℓ (1/m1 + 1/m2) ≤ 4kℓ/m at the lighter node, so
+        // 4kℓ/m at each node covers all pairs
+        let wc2 = 4.0 * contact.max_stiffness * self.surface.tributary_max(b) / m;
+        let w = (we * we + wc2).sqrt();
+        let xi = contact.max_damping * wc2.sqrt() / w;
+        Some((w, (1.0 + xi * xi).sqrt() - xi))
+    }
+
+    /// Selective mass scaling (docs/mass_scaling.md): raises the density
+    /// factor of every element whose own frequency, or whose node's
+    /// frequency with its contact springs, would need a step shorter than
+    /// `target` (s, before the safety factor), by the factor that makes it
+    /// meet `target` exactly. An element needs `ω_e ≤ W` with `W = 2 /
+    /// √(T² + 2Tβ)` (the stiffness-damping-reduced bound solved for ω); a
+    /// contact node's frequency and dashpot factor scale uniformly when all
+    /// its elements' masses do, so it needs the factor `(ω T / 2r)²` on
+    /// them. Factors only grow. Once the run has started, a node whose mass
+    /// grows keeps its momentum (its whole-step velocity drops by
+    /// `m_old / m_new`), the reported work terms stay continuous, and the
+    /// kinetic energy that this inelastic accretion takes is booked as
+    /// `mass_scaling` in the energy account. Before the first step the
+    /// given velocities stay. Returns the elements changed, ascending.
+    pub(crate) fn scale_masses(&mut self, target: f64) -> Vec<u32> {
+        let beta = self.settings.stiffness_damping;
+        let w_max = 2.0 / (target * target + 2.0 * target * beta).sqrt();
+        let mut need: Vec<(u32, f64)> = Vec::new();
+        for (e, &w) in self.omega.iter().enumerate() {
+            if self.elems.active[e] && w > w_max {
+                need.push((e as u32, (w / w_max) * (w / w_max)));
+            }
+        }
+        if let Some(contact) = &self.contact {
+            for b in 0..self.surface.nodes.len() {
+                let Some((w, r)) = self.contact_node_frequency(contact, b) else { continue };
+                let s = (w * target / (2.0 * r)).powi(2);
+                if s > 1.0 {
+                    let node = self.surface.nodes[b] as usize;
+                    need.extend(self.node_elems.row(node).iter().map(|&i| (i / 3, s)));
+                }
+            }
+        }
+        if need.is_empty() {
+            return Vec::new();
+        }
+        need.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
+        need.dedup_by_key(|p| p.0); // keeps the largest factor of each element
+        let started = self.dt_prev > 0.0;
+        for &(e, s) in &need {
+            self.elems.mass_scale[e as usize] *= s;
+        }
+        let mut nodes: Vec<u32> = need.iter().flat_map(|&(e, _)| self.elems.conn[e as usize]).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        // only these nodes' masses change: their share of the account
+        // before and after is the change of the whole account
+        let terms = |sim: &Self| {
+            let mut sum = [0.0; 6];
+            for &v in &nodes {
+                let t = sim.node_energy_terms(v as usize);
+                (0..6).for_each(|k| sum[k] += t[k]);
+            }
+            sum
+        };
+        let before = if started { terms(self) } else { [0.0; 6] };
+        let old: Vec<(f64, Vec2)> =
+            nodes.iter().map(|&v| (self.nodes.mass[v as usize], self.whole_step_velocity(v as usize))).collect();
+        for &v in &nodes {
+            // in ascending element order, as `rebuild_structure` sums
+            let mut m = 0.0;
+            for &i in self.node_elems.row(v as usize) {
+                let e = (i / 3) as usize;
+                let t = self.elems.conn[e];
+                let x = [self.nodes.x0[t[0] as usize], self.nodes.x0[t[1] as usize], self.nodes.x0[t[2] as usize]];
+                m += fdem_element::lumped_mass(
+                    self.materials[self.elems.material[e] as usize].density * self.elems.mass_scale[e],
+                    fdem_element::signed_area(&x),
+                );
+            }
+            self.nodes.mass[v as usize] = m;
+        }
+        if started {
+            for (&v, &(m_old, vn)) in nodes.iter().zip(&old) {
+                let k = m_old / self.nodes.mass[v as usize];
+                self.set_whole_step_velocity(v as usize, [vn[0] * k, vn[1] * k]);
+            }
+            let after = terms(self);
+            let acc = &mut self.energies;
+            acc.external_work += before[1] - after[1];
+            acc.support_work += before[2] - after[2];
+            acc.mass_damping += before[3] - after[3];
+            acc.contact_work += before[4] - after[4];
+            acc.contact_damping += before[5] - after[5];
+            acc.mass_scaling += before[0] - after[0];
+        }
+        need.into_iter().map(|(e, _)| e).collect()
     }
 
     /// Advances one step.
@@ -446,7 +565,7 @@ impl Simulation {
             }
         }
         if self.settings.fixed_dt.is_none() && self.step % self.settings.dt_interval as u64 == 0 {
-            self.update_time_step();
+            self.update_time_step_for(None, false);
         }
         Ok(())
     }
@@ -558,6 +677,11 @@ pub(crate) fn check_settings(s: &Settings) -> Result<(), SetupError> {
     if let Some(dt) = s.fixed_dt {
         if !(dt > 0.0 && dt.is_finite()) {
             return invalid(format!("fixed time step dt = {dt} must be positive"));
+        }
+    }
+    if let Some(dt) = s.mass_scaling {
+        if !(dt > 0.0 && dt.is_finite()) {
+            return invalid(format!("mass_scaling (the time step to hold) = {dt} must be positive"));
         }
     }
     if s.dt_interval == 0 {

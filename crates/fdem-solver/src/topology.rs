@@ -145,7 +145,7 @@ impl crate::simulation::Simulation {
             }
             let x = [self.nodes.x0[t[0] as usize], self.nodes.x0[t[1] as usize], self.nodes.x0[t[2] as usize]];
             let nodal = fdem_element::lumped_mass(
-                self.materials[self.elems.material[e] as usize].density,
+                self.materials[self.elems.material[e] as usize].density * self.elems.mass_scale[e],
                 fdem_element::signed_area(&x),
             );
             for &v in t {
