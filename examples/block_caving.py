@@ -40,6 +40,12 @@ def main(argv: list[str] | None = None) -> dict:
         default=None,
         help="smallest altitude of a triangle a crack may create, as a fraction of the mesh's smallest (default 0.6)",
     )
+    ap.add_argument(
+        "--mass-scaling",
+        default=None,
+        help="the step to hold after cracks, as a fraction of the intact model's, by selective mass scaling "
+        "(default 0.8; 'off': physical masses, the step falls with the fragments)",
+    )
     ap.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
     ap.add_argument("--quiet", action="store_true", help="no progress display")
     args = ap.parse_args(argv)
@@ -50,6 +56,9 @@ def main(argv: list[str] | None = None) -> dict:
         case = replace(case, size=args.size)
     if args.min_size is not None:
         case = replace(case, min_size=args.min_size)
+    if args.mass_scaling is not None:
+        off = args.mass_scaling.lower() in ("off", "none")
+        case = replace(case, mass_scaling=None if off else float(args.mass_scaling))
     out = args.out or ("caving_output_quick" if args.quick else "caving_output")
     return run_caving(out, case, threads=args.threads, progress=not args.quiet)
 

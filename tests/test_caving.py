@@ -179,12 +179,15 @@ def test_quick_caving_runs_undercuts_in_order_and_caves(quick_caving):
 
 
 def test_quick_caving_keeps_mass_and_closes_its_energy_balance(quick_caving):
-    """Issue 6 (5): total nodal mass equals Σ ρ A of the elements left (to
-    1e-12 relative, cracks included: every insertion keeps mass), and the
-    energy balance closes within 2% of the energy supplied (work of gravity
-    and the top pressure; measured 0.10%, 1.4e7 of 1.35e10 J). Crack
-    insertions re-form contacts; what that releases or creates is booked
-    as `resurfacing` and must stay small too (measured −4.6e6 J)."""
+    """Issue 6 (5): total nodal mass equals Σ ρ A of the elements left plus
+    the mass that mass scaling added, Σ (s_e − 1) ρ A (to 1e-12 relative,
+    cracks included: every insertion keeps mass), and the energy balance
+    closes within 2% of the energy supplied (work of gravity and the top
+    pressure; measured 0.07%). Crack insertions re-form contacts; what
+    that releases or creates is booked as `resurfacing` and must stay small
+    too. Mass scaling holds 0.8 of the intact step (the step may fall 10%
+    below that between topology changes, as elements deform) and adds
+    under 2% of the mass (measured 0.95%, docs/mass_scaling.md)."""
     _, summary = quick_caving
     sim = summary["simulation"]
     active = sim.active()
@@ -193,7 +196,12 @@ def test_quick_caving_keeps_mass_and_closes_its_energy_balance(quick_caving):
     x0 = sim.reference_positions()[sim.triangles()[active]]
     d1, d2 = x0[:, 1] - x0[:, 0], x0[:, 2] - x0[:, 0]
     a0 = 0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
-    assert sim.masses().sum() == pytest.approx(rho * a0.sum(), rel=1e-12)
+    scale = sim.mass_scale()[active]
+    added = rho * ((scale - 1) * a0).sum()
+    assert sim.added_mass == pytest.approx(added, rel=1e-12)
+    assert sim.masses().sum() == pytest.approx(rho * a0.sum() + added, rel=1e-12)
+    assert 0 < added < 0.02 * rho * a0.sum()
+    assert summary["time_step_s"] >= 0.9 * 0.8 * summary["intact_time_step_s"]
     audit = sim.insertion_audit()
     assert audit["mass"] <= 1e-12 and audit["momentum"] <= 1e-12
     assert abs(summary["energy_residual_J"]) < 0.02 * summary["energy_supplied_J"]
