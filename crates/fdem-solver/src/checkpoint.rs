@@ -48,8 +48,8 @@ use fdem_mesh::Csr;
 
 /// The first eight bytes of every checkpoint file.
 pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
-/// The checkpoint format this build writes and reads (2: elements carry
-/// mass-scaling factors; older files are refused with a clear message).
+/// The checkpoint format this build writes; it reads this one and older.
+/// Format 2 appends [`Format2`] (mass scaling) to the format-1 state.
 pub const FORMAT_VERSION: u32 = 2;
 const HEADER: usize = 40;
 
@@ -177,6 +177,32 @@ saved_state! {
     held_seen: f64,
 }
 
+/// What format 2 added, written after the format-1 state (so a format-1
+/// file still decodes, with every mass physical): the elements' density
+/// factors, the mass-scaling setting and its energy term.
+#[derive(Serialize, Deserialize)]
+struct Format2 {
+    mass_scale: Vec<f64>,
+    mass_scaling: Option<f64>,
+    mass_scaling_energy: f64,
+}
+
+impl Format2 {
+    fn of(s: &Simulation) -> Self {
+        Format2 {
+            mass_scale: s.elems.mass_scale.clone(),
+            mass_scaling: s.settings.mass_scaling,
+            mass_scaling_energy: s.energies.mass_scaling,
+        }
+    }
+
+    fn apply(self, o: &mut StateOwned) {
+        o.elems.mass_scale = self.mass_scale;
+        o.settings.mass_scaling = self.mass_scaling;
+        o.energies.mass_scaling = self.mass_scaling_energy;
+    }
+}
+
 fn le_u32(b: &[u8]) -> u32 {
     u32::from_le_bytes([b[0], b[1], b[2], b[3]])
 }
@@ -193,7 +219,8 @@ impl Simulation {
     pub fn checkpoint_bytes(&self, user: &[u8]) -> Vec<u8> {
         // postcard serialises plain data into a Vec; it fails only on
         // types it does not support, which a unit test rules out.
-        let state = postcard::to_stdvec(&state_ref(self)).expect("simulation state is serialisable");
+        let mut state = postcard::to_stdvec(&state_ref(self)).expect("simulation state is serialisable");
+        state.extend(postcard::to_stdvec(&Format2::of(self)).expect("format-2 data is serialisable"));
         let mut out = Vec::with_capacity(HEADER + state.len() + user.len());
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -230,13 +257,6 @@ impl Simulation {
         if version == 0 {
             return Err(CheckpointError::Corrupted("format version 0".into()));
         }
-        if version < FORMAT_VERSION {
-            // format 2 added the elements' mass-scaling factors
-            return Err(CheckpointError::Invalid(format!(
-                "format version {version} was written by an older fdem; this build reads format {FORMAT_VERSION} \
-                 only: rerun from the model"
-            )));
-        }
         let (s_len, u_len) = (le_u64(&bytes[16..24]), le_u64(&bytes[24..32]));
         let expected = (HEADER as u64).saturating_add(s_len).saturating_add(u_len);
         let found = bytes.len() as u64;
@@ -251,8 +271,18 @@ impl Simulation {
             return Err(CheckpointError::Corrupted("data checksum mismatch".into()));
         }
         let (state, user) = body.split_at(s_len as usize);
-        let owned: StateOwned = postcard::from_bytes(state)
-            .map_err(|e| CheckpointError::Invalid(format!("cannot decode the state: {e}")))?;
+        let decode = |e: postcard::Error| CheckpointError::Invalid(format!("cannot decode the state: {e}"));
+        let (mut owned, rest): (StateOwned, &[u8]) = postcard::take_from_bytes(state).map_err(decode)?;
+        let (added, rest) = if version >= 2 {
+            postcard::take_from_bytes::<Format2>(rest).map_err(decode)?
+        } else {
+            let m = owned.elems.conn.len();
+            (Format2 { mass_scale: vec![1.0; m], mass_scaling: None, mass_scaling_energy: 0.0 }, rest)
+        };
+        if !rest.is_empty() {
+            return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
+        }
+        added.apply(&mut owned);
         check_consistent(&owned)?;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

@@ -58,6 +58,8 @@ pub struct Energies {
     /// Kinetic energy taken by selective mass scaling: a node whose mass
     /// is raised during the run keeps its momentum, so its kinetic energy
     /// drops by `(1 − m_old/m_new)` (an inelastic accretion; ≥ 0).
+    // written after the format-1 state in checkpoints (checkpoint.rs)
+    #[serde(skip)]
     pub mass_scaling: f64,
     /// Work done on the nodes by contact and bond forces (a diagnostic:
     /// ideally `−(contact_elastic + friction + contact_damping +

@@ -64,6 +64,8 @@ pub struct Settings {
     /// shorter step, its elements' density is raised by the factor that
     /// makes it meet `Δt / safety` (docs/mass_scaling.md); `None` leaves
     /// every mass physical.
+    // written after the format-1 state in checkpoints (checkpoint.rs)
+    #[serde(skip)]
     pub mass_scaling: Option<f64>,
 }
 

@@ -40,7 +40,9 @@ pub(crate) struct Elements {
     pub active: Vec<bool>,
     /// Co-rotational Cauchy stress `σ̂` (Pa).
     pub stress: Vec<[f64; 4]>,
-    /// Density factor of selective mass scaling (1: physical mass).
+    /// Density factor of selective mass scaling (1: physical mass);
+    /// written after the format-1 state in checkpoints (checkpoint.rs).
+    #[serde(skip)]
     pub mass_scale: Vec<f64>,
     /// Plastic state (unused for elastic materials).
     pub state: Vec<PlasticState>,

@@ -116,3 +116,39 @@ fn a_consistent_checksum_over_inconsistent_data_is_refused() {
     let e = Simulation::from_checkpoint_bytes(&good, 1).err().unwrap();
     assert!(matches!(e, CheckpointError::Invalid(_)), "{e}");
 }
+
+#[test]
+fn a_format_1_file_still_reads_with_physical_masses() {
+    // format 2 appends the mass-scaling block (density factors, setting,
+    // energy term) to the format-1 state; cut it off, mark the file as
+    // format 1 and reseal: it must read back as the same run
+    let mut a = Simulation::new(plate(6), 1).unwrap();
+    a.step(30).unwrap();
+    let v2 = a.checkpoint_bytes(b"meta");
+    let m = a.triangles().len();
+    // postcard: varint length + m f64, `None` (one byte), one f64
+    let varint = if m < 128 {
+        1
+    } else if m < 16384 {
+        2
+    } else {
+        3
+    };
+    let block = varint + 8 * m + 1 + 8;
+    let s_len = u64::from_le_bytes(v2[16..24].try_into().unwrap()) as usize;
+    let mut v1 = v2[..40].to_vec();
+    v1.extend_from_slice(&v2[40..40 + s_len - block]);
+    v1.extend_from_slice(&v2[40 + s_len..]);
+    v1[8..12].copy_from_slice(&1u32.to_le_bytes());
+    v1[16..24].copy_from_slice(&((s_len - block) as u64).to_le_bytes());
+    let crc = crc32fast::hash(&v1[40..]);
+    v1[32..36].copy_from_slice(&crc.to_le_bytes());
+    reseal(&mut v1);
+    let (mut b, user) = Simulation::from_checkpoint_bytes(&v1, 1).unwrap();
+    assert_eq!(user, b"meta");
+    assert!(b.mass_scale().iter().all(|&s| s == 1.0) && b.mass_scale().len() == m);
+    assert!(b.checkpoint_bytes(b"meta") == v2, "format 1 read back differs");
+    a.step(20).unwrap();
+    b.step(20).unwrap();
+    assert!(a.checkpoint_bytes(b"") == b.checkpoint_bytes(b""));
+}
