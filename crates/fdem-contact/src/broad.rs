@@ -11,7 +11,9 @@
 //!
 //! Tree leaves are the facets' stable keys ([`SurfaceFacet::key`]), so a
 //! topology change (crack insertion, excavation) removes and inserts only
-//! the leaves that changed and refits, instead of rebuilding the tree.
+//! the leaves that changed, and [`BroadPhase::carry_over`] keeps the
+//! candidate lists of the unchanged nodes and facets instead of querying
+//! every boundary node again.
 //!
 //! [`SurfaceFacet::key`]: crate::SurfaceFacet::key
 
@@ -207,10 +209,161 @@ impl BroadPhase {
         }
     }
 
+    /// Carries the tree and the candidate list over a topology change from
+    /// `old` to `new` (the same mesh nodes, renumbered facets and boundary
+    /// nodes) at positions `x`, instead of rebuilding and re-querying every
+    /// boundary node. With `T` the last build and `m` the margin, every
+    /// node stays within `m/2` of where it was at `T` until the next build,
+    /// so within `m` of where it is now; a node created now stays within
+    /// `m/2` of here. Then:
+    ///
+    /// - a pair of a facet kept (same key, same two nodes) and a node that
+    ///   was on the surface keeps its standing from `T`;
+    /// - a new facet (new key, or a key whose nodes changed) can reach a
+    ///   node only if their boxes are within `2m` now: it enters the tree
+    ///   with its box enlarged by `2m` and every boundary node is tested
+    ///   against that box;
+    /// - a node new to the surface is queried against the whole tree (kept
+    ///   facets' boxes from `T` enlarged by `m`, new ones by `2m`) and
+    ///   remembered at its position now.
+    ///
+    /// The lists are supersets of what a fresh build would give (extra
+    /// pairs are never in contact; the narrow phase only acts on
+    /// penetrations), sorted per node, and depend on nothing but the saved
+    /// state, so a restored run continues bit for bit. Falls back to a full
+    /// rebuild at the next [`update`](Self::update) when the list is not
+    /// built yet or the margin grew.
+    pub fn carry_over(&mut self, old: &Surface, new: &Surface, x: &[Vec2], margin: f64) {
+        let built = !self.fresh
+            && !self.changed
+            && self.built_at.len() == old.nodes.len()
+            && self.candidates.offsets.len() == old.nodes.len() + 1
+            && self.boxes.len() == old.facets.len()
+            && margin <= self.margin;
+        self.margin = margin;
+        if !built {
+            self.changed = true;
+            return;
+        }
+        let m = margin;
+        let max_key = new.facets.last().map_or(0, |f| f.key as usize + 1);
+        // old facet → new facet where it is kept, else NONE
+        let old_to_new: Vec<u32> = old
+            .facets
+            .iter()
+            .map(|f| {
+                let i = key_index(new, f.key);
+                if i != crate::NONE && new.facets[i as usize].nodes == f.nodes {
+                    i
+                } else {
+                    crate::NONE
+                }
+            })
+            .collect();
+        for (j, f) in old.facets.iter().enumerate() {
+            if old_to_new[j] == crate::NONE {
+                self.bvh.remove(f.key);
+            }
+        }
+        let mut boxes = Vec::with_capacity(new.facets.len());
+        let mut fresh: Vec<u32> = Vec::new();
+        let mut fresh_boxes: Vec<Aabb> = Vec::new();
+        for (i, f) in new.facets.iter().enumerate() {
+            let j = key_index(old, f.key);
+            if j != crate::NONE && old_to_new[j as usize] == i as u32 {
+                boxes.push(self.boxes[j as usize]);
+            } else {
+                let (a, b) = (x[f.nodes[0] as usize], x[f.nodes[1] as usize]);
+                let bx = Aabb::new(
+                    Vector::new(a[0].min(b[0]) - 2.0 * m, a[1].min(b[1]) - 2.0 * m),
+                    Vector::new(a[0].max(b[0]) + 2.0 * m, a[1].max(b[1]) + 2.0 * m),
+                );
+                self.bvh.insert(bx, f.key);
+                boxes.push(bx);
+                fresh.push(i as u32);
+                fresh_boxes.push(bx);
+            }
+        }
+        self.boxes = boxes;
+        self.facet_of_key.clear();
+        self.facet_of_key.resize(max_key, crate::NONE);
+        for (i, f) in new.facets.iter().enumerate() {
+            self.facet_of_key[f.key as usize] = i as u32;
+        }
+        self.keys.clear();
+        self.keys.extend(new.facets.iter().map(|f| f.key));
+        // every boundary node's list, chunk by chunk, into reused buffers
+        let n_chunks = new.nodes.len().div_ceil(CHUNK);
+        self.chunk_lists.resize_with(n_chunks, Vec::new);
+        self.chunk_counts.resize_with(n_chunks, Vec::new);
+        let mut built_at = vec![[0.0; 2]; new.nodes.len()];
+        let (bvh, facet_of_key, old_cand, old_at) = (&self.bvh, &self.facet_of_key, &self.candidates, &self.built_at);
+        let (fresh, fresh_boxes, old_to_new) = (&fresh, &fresh_boxes, &old_to_new);
+        new.nodes
+            .par_chunks(CHUNK)
+            .zip(built_at.par_chunks_mut(CHUNK))
+            .zip(self.chunk_lists.par_iter_mut().zip(self.chunk_counts.par_iter_mut()))
+            .for_each(|((nodes, at), (list, counts))| {
+                list.clear();
+                counts.clear();
+                for (&n, at) in nodes.iter().zip(at) {
+                    let p = x[n as usize];
+                    let own = |k: u32| {
+                        let f = new.facets[k as usize].nodes;
+                        f[0] != n && f[1] != n
+                    };
+                    let start = list.len();
+                    let ob = old.index_of.get(n as usize).copied().unwrap_or(crate::NONE);
+                    if ob == crate::NONE {
+                        let q = Aabb::new(Vector::new(p[0], p[1]), Vector::new(p[0], p[1]));
+                        list.extend(bvh.intersect_aabb(&q).map(|leaf| facet_of_key[leaf as usize]).filter(|&k| own(k)));
+                        *at = p;
+                    } else {
+                        list.extend(
+                            old_cand
+                                .row(ob as usize)
+                                .iter()
+                                .map(|&j| old_to_new[j as usize])
+                                .filter(|&k| k != crate::NONE),
+                        );
+                        for (&k, bx) in fresh.iter().zip(fresh_boxes) {
+                            let inside =
+                                bx.mins.x <= p[0] && p[0] <= bx.maxs.x && bx.mins.y <= p[1] && p[1] <= bx.maxs.y;
+                            if inside && own(k) {
+                                list.push(k);
+                            }
+                        }
+                        *at = old_at[ob as usize];
+                    }
+                    list[start..].sort_unstable();
+                    counts.push((list.len() - start) as u32);
+                }
+            });
+        self.built_at = built_at;
+        let cand = &mut self.candidates;
+        cand.offsets.clear();
+        cand.items.clear();
+        cand.offsets.push(0);
+        let mut total = 0u32;
+        for (list, counts) in self.chunk_lists.iter().zip(&self.chunk_counts) {
+            for &c in counts {
+                total += c;
+                cand.offsets.push(total);
+            }
+            cand.items.extend_from_slice(list);
+        }
+    }
+
     /// Number of candidate pairs in the list.
     pub fn pairs(&self) -> usize {
         self.candidates.items.len()
     }
+}
+
+/// Index of the facet with `key` in `surface` (facets are sorted by key),
+/// or `NONE`.
+fn key_index(surface: &Surface, key: u32) -> u32 {
+    surface.facets.binary_search_by_key(&key, |f| f.key).map_or(crate::NONE, |i| i as u32)
 }
 
 /// What a checkpoint keeps of a [`BroadPhase`]: everything its candidate
@@ -336,5 +489,118 @@ mod tests {
         assert!(!bp.needs_update(&s, &moved));
         moved[5][0] += 0.002;
         assert!(bp.update(&s, &moved));
+    }
+
+    /// Facets with laws, their keys, node positions, facet apexes.
+    type Squares = (Vec<([u32; 2], u16)>, Vec<u32>, Vec<Vec2>, Vec<Vec2>);
+
+    /// A row of `k` unit squares 0.05 m apart; the facets of square `i`
+    /// carry keys `10 i + side`.
+    fn row_of_squares(k: usize) -> Squares {
+        let (mut facets, mut keys, mut x, mut apex) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for i in 0..k {
+            let x0 = 1.05 * i as f64;
+            let b = x.len() as u32;
+            x.extend([[x0, 0.0], [x0 + 1.0, 0.0], [x0 + 1.0, 1.0], [x0, 1.0]]);
+            for side in 0..4u32 {
+                facets.push(([b + side, b + (side + 1) % 4], 0));
+                keys.push(10 * i as u32 + side);
+                apex.push([x0 + 0.5, 0.5]);
+            }
+        }
+        (facets, keys, x, apex)
+    }
+
+    /// Deterministic displacements in `[-a, a]²`.
+    fn jiggle(x: &[Vec2], a: f64, seed: &mut u64) -> Vec<Vec2> {
+        let mut r = || {
+            *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        x.iter().map(|p| [p[0] + a * r(), p[1] + a * r()]).collect()
+    }
+
+    /// Node `n` inside facet `f`'s box enlarged by `eps`: with every node
+    /// within 0.49 m of where the list was made, such a pair must be listed
+    /// for `eps` up to 0.02 m (the slack left from m/2).
+    fn touching(s: &Surface, x: &[Vec2], n: u32, f: usize, eps: f64) -> bool {
+        let [a, b] = s.facets[f].nodes.map(|v| x[v as usize]);
+        let p = x[n as usize];
+        let nodes = s.facets[f].nodes;
+        nodes[0] != n
+            && nodes[1] != n
+            && a[0].min(b[0]) - eps <= p[0]
+            && p[0] <= a[0].max(b[0]) + eps
+            && a[1].min(b[1]) - eps <= p[1]
+            && p[1] <= a[1].max(b[1]) + eps
+    }
+
+    #[test]
+    fn carried_over_lists_cover_every_pair_that_can_touch_before_the_next_build() {
+        let margin = 0.1;
+        let mut seed = 7;
+        let mut checked = 0;
+        for trial in 0..40 {
+            let (facets, keys, x0, apex) = row_of_squares(4);
+            let n0 = x0.len();
+            let old = Surface::with_keys(n0 + 1, &facets, &x0, &apex, &keys);
+            let mut bp = BroadPhase::new(margin);
+            let x0: Vec<Vec2> = x0.into_iter().chain([[0.0, 0.0]]).collect();
+            bp.build(&old, &x0);
+            // everything moves, up to just under half the margin
+            let mut x1 = jiggle(&x0, 0.49 * margin / 2f64.sqrt(), &mut seed);
+            // a crack: the top facet of square 1 (nodes 6, 7) is split by a
+            // new node at its middle, and square 2's left side gets a copy
+            // of its lower node (node 8 → the new node n0)
+            x1[n0] = [0.5 * (x1[6][0] + x1[7][0]), 0.5 * (x1[6][1] + x1[7][1])];
+            let mut nf = facets.clone();
+            let mut nk = keys.clone();
+            let top = nf.iter().position(|f| f.0 == [6, 7]).unwrap();
+            nf[top] = ([6, n0 as u32], 0);
+            nf.push(([n0 as u32, 7], 0));
+            nk.push(1000);
+            let left = nf.iter().position(|f| f.0 == [11, 8]).unwrap();
+            nf[left] = ([11, 8], 0);
+            if trial % 2 == 1 {
+                // the other change: a facet keeps its key but not its nodes
+                nf[left] = ([11, n0 as u32], 0);
+            }
+            let mut napex = apex.clone();
+            napex.push(apex[top]);
+            let new = Surface::with_keys(n0 + 1, &nf, &x1, &napex, &nk);
+            assert!(!bp.needs_update(&old, &x1));
+            bp.carry_over(&old, &new, &x1, margin);
+            // a superset of a fresh build here
+            let mut fresh = BroadPhase::new(margin);
+            fresh.build(&new, &x1);
+            for b in 0..new.nodes.len() {
+                let row = bp.candidates.row(b);
+                for f in fresh.candidates.row(b) {
+                    assert!(row.contains(f), "trial {trial}: node {} lost facet {f}", new.nodes[b]);
+                }
+                assert!(row.windows(2).all(|w| w[0] < w[1]));
+            }
+            // and any motion that does not trigger a rebuild finds every
+            // touching pair listed
+            for _ in 0..50 {
+                let mut x2 = x1.clone();
+                for (b, &n) in new.nodes.iter().enumerate() {
+                    let at = bp.built_at[b];
+                    let p = jiggle(&[at], 0.49 * margin / 2f64.sqrt(), &mut seed)[0];
+                    x2[n as usize] = p;
+                }
+                assert!(!bp.needs_update(&new, &x2));
+                for (b, &n) in new.nodes.iter().enumerate() {
+                    for f in 0..new.facets.len() {
+                        if touching(&new, &x2, n, f, 0.01 * margin) {
+                            assert!(bp.candidates.row(b).contains(&(f as u32)), "trial {trial}: node {n}, facet {f}");
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        // pairs across the 0.05 m gaps and the new facets' own neighbours
+        assert!(checked > 1_000, "{checked}");
     }
 }

@@ -118,10 +118,9 @@ impl ContactModel {
     /// penetration it has (see [`ContactState::resumed_along`]); `x` are the
     /// current positions.
     pub fn adopt(&mut self, old: Option<&Surface>, new: &Surface, x: &[Vec2], origins: &[(u32, u32)]) {
-        if self.margin.is_none() {
-            let mean = new.facets.iter().map(|f| f.length).sum::<f64>() / new.facets.len().max(1) as f64;
-            self.broad.margin = 0.2 * mean;
-        }
+        let margin = self
+            .margin
+            .unwrap_or_else(|| 0.2 * new.facets.iter().map(|f| f.length).sum::<f64>() / new.facets.len().max(1) as f64);
         let mut states = vec![ContactState::default(); new.nodes.len()];
         if let Some(old) = old {
             // a facet keeps its key through a rebuild; a contact stays on it
@@ -171,7 +170,13 @@ impl ContactModel {
         self.states = states;
         self.out = vec![NodeContact { facet: NONE, ..Default::default() }; new.nodes.len()];
         self.size_scratch(new);
-        self.broad.invalidate();
+        match old {
+            Some(old) => self.broad.carry_over(old, new, x, margin),
+            None => {
+                self.broad.margin = margin;
+                self.broad.invalidate();
+            }
+        }
     }
 
     /// One contact evaluation at positions `x`, velocities `v` (the broad
