@@ -113,13 +113,11 @@ impl BroadPhase {
         let m = self.margin;
         let nf = surface.facets.len();
         self.boxes.resize(nf, Aabb::new_invalid());
-        self.boxes.par_iter_mut().zip(surface.facets.par_iter()).with_min_len(CHUNK).for_each(|(bx, f)| {
-            let (a, b) = (x[f.nodes[0] as usize], x[f.nodes[1] as usize]);
-            *bx = Aabb::new(
-                Vector::new(a[0].min(b[0]) - m, a[1].min(b[1]) - m),
-                Vector::new(a[0].max(b[0]) + m, a[1].max(b[1]) + m),
-            );
-        });
+        self.boxes
+            .par_iter_mut()
+            .zip(surface.facets.par_iter())
+            .with_min_len(CHUNK)
+            .for_each(|(bx, f)| *bx = facet_box(x, f.nodes, m));
         if self.fresh || self.changed {
             // key → facet of the new surface
             let max_key = surface.facets.last().map_or(0, |f| f.key as usize + 1);
@@ -273,11 +271,7 @@ impl BroadPhase {
             if j != crate::NONE && old_to_new[j as usize] == i as u32 {
                 boxes.push(self.boxes[j as usize]);
             } else {
-                let (a, b) = (x[f.nodes[0] as usize], x[f.nodes[1] as usize]);
-                let bx = Aabb::new(
-                    Vector::new(a[0].min(b[0]) - 2.0 * m, a[1].min(b[1]) - 2.0 * m),
-                    Vector::new(a[0].max(b[0]) + 2.0 * m, a[1].max(b[1]) + 2.0 * m),
-                );
+                let bx = facet_box(x, f.nodes, 2.0 * m);
                 self.bvh.insert(bx, f.key);
                 boxes.push(bx);
                 fresh.push(i as u32);
@@ -358,6 +352,27 @@ impl BroadPhase {
     pub fn pairs(&self) -> usize {
         self.candidates.items.len()
     }
+}
+
+/// The box of facet `nodes` at `x`, extended past both ends by the
+/// narrow phase's end slack ([`XI_SLACK`](crate::narrow::XI_SLACK)) of its
+/// length, then enlarged by `margin (1 + XI_SLACK)`: a node just past a
+/// facet's end that the narrow phase would take is listed however long the
+/// facet (without the extension, a node past the end of a long facet was
+/// listed or not depending on when the list was made). The extra
+/// `XI_SLACK · margin` covers the extension's own motion while the
+/// endpoints move by up to `margin / 2` each (stretching or turning the
+/// facet) before the next build.
+fn facet_box(x: &[Vec2], nodes: [u32; 2], margin: f64) -> Aabb {
+    let s = crate::narrow::XI_SLACK;
+    let (a, b) = (x[nodes[0] as usize], x[nodes[1] as usize]);
+    let d = [s * (b[0] - a[0]), s * (b[1] - a[1])];
+    let (p, q) = ([a[0] - d[0], a[1] - d[1]], [b[0] + d[0], b[1] + d[1]]);
+    let pad = margin * (1.0 + s);
+    Aabb::new(
+        Vector::new(p[0].min(q[0]) - pad, p[1].min(q[1]) - pad),
+        Vector::new(p[0].max(q[0]) + pad, p[1].max(q[1]) + pad),
+    )
 }
 
 /// Index of the facet with `key` in `surface` (facets are sorted by key),
@@ -482,6 +497,13 @@ mod tests {
         let mut tight = BroadPhase::new(0.01);
         tight.update(&s, &x);
         assert!(!tight.candidates.row(s.index_of[1] as usize).contains(&7));
+        // but a node past a facet's end by up to 5% of its length (the
+        // narrow phase's slack) is listed: node 4 put at (1.005, -0.04), below
+        // the end (1, 0) of facet 1, (1, 0)-(1, 1)
+        let mut below: Vec<Vec2> = x.clone();
+        below[4] = [1.005, -0.04];
+        tight.build(&s, &below);
+        assert!(tight.candidates.row(s.index_of[4] as usize).contains(&1));
         // no rebuild until something moves half the margin
         assert!(!bp.update(&s, &x));
         let mut moved = x.clone();

@@ -15,7 +15,9 @@ use crate::{Vec2, CHUNK, NONE};
 /// projection clamped to the end). Without it, the end nodes of a joint
 /// whose two sides drift apart by round-off-sized shear (a micron) drop out
 /// of contact and the rock beside the joint's end carries nothing.
-const XI_SLACK: f64 = 0.05;
+/// The broad phase pads every facet box by this much of its length too, so
+/// that the whole region where the narrow phase accepts a contact is listed.
+pub(crate) const XI_SLACK: f64 = 0.05;
 
 /// Relative slack on the depth a contact that moves to another facet (or
 /// resumes after a topology change) may have: its spring energy may grow by

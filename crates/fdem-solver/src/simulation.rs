@@ -321,7 +321,7 @@ impl Simulation {
             if let Some(contact) = &self.contact {
                 for b in 0..self.surface.nodes.len() {
                     if let Some((w, r)) = self.contact_node_frequency(contact, b) {
-                        crit = crit.min(2.0 * r / w);
+                        crit = crit.min(2.0 / w * r);
                     }
                 }
             }
