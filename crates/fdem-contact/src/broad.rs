@@ -193,18 +193,7 @@ impl BroadPhase {
                     counts.push((list.len() - start) as u32);
                 }
             });
-        let cand = &mut self.candidates;
-        cand.offsets.clear();
-        cand.items.clear();
-        cand.offsets.push(0);
-        let mut total = 0u32;
-        for (list, counts) in self.chunk_lists.iter().zip(&self.chunk_counts) {
-            for &c in counts {
-                total += c;
-                cand.offsets.push(total);
-            }
-            cand.items.extend_from_slice(list);
-        }
+        self.join_chunk_lists();
     }
 
     /// Carries the tree and the candidate list over a topology change from
@@ -334,6 +323,12 @@ impl BroadPhase {
                 }
             });
         self.built_at = built_at;
+        self.join_chunk_lists();
+    }
+
+    /// The candidate list from the per-chunk lists and counts, in node
+    /// order (reusing the list's buffers).
+    fn join_chunk_lists(&mut self) {
         let cand = &mut self.candidates;
         cand.offsets.clear();
         cand.items.clear();
