@@ -155,6 +155,19 @@ def test_mid_run_scaling_keeps_momentum_and_books_the_kinetic_energy():
     assert abs(e2["residual"]) <= 1e-3 * e2["largest_term"]
 
 
+def test_mass_scale_is_written_to_the_vtu(tmp_path):
+    """Where mass was added is visible in ParaView: cell field
+    ``mass_scale`` of every frame equals the kernel's factors."""
+    meshio = pytest.importorskip("meshio")
+    mesh = perturbed_rectangle(1.0, 0.6, 9, 6, amount=0.4, seed=3)
+    model = fdem.Model(mesh, material=ROCK)
+    sim = fdem.Simulation(model, mass_scaling=2 * fdem.Simulation(model).time_step)
+    sim.run(until=5 * sim.time_step, output_every=2 * sim.time_step, output=tmp_path, progress=False)
+    frame = meshio.read(sorted(tmp_path.glob("fdem_*.vtu"))[-1])
+    np.testing.assert_array_equal(frame.cell_data["mass_scale"][0], sim.mass_scale())
+    assert frame.cell_data["mass_scale"][0].max() > 1
+
+
 def test_mass_scaling_is_validated():
     """A non-positive or non-finite step is refused, naming the parameter."""
     model = fdem.Model(fdem.Mesh.rectangle(1.0, 1.0, 2, 2), material=ROCK)

@@ -50,6 +50,8 @@ def cell_fields(sim: Simulation) -> dict[str, NDArray[Any]]:
         "fracturing_strain": state["kappa"],
         "crack_band": state["crack_band"],
         "crack_direction": state["crack_direction"],
+        # density factor of mass scaling (1: physical; docs/mass_scaling.md)
+        "mass_scale": sim.mass_scale(),
     }
 
 
