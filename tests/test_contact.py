@@ -290,9 +290,9 @@ def _joint_block(kind: str) -> fdem.Simulation:
             "X",
             marks=pytest.mark.xfail(
                 strict=True,
-                reason="known defect (docs/caving.md): none of the four corner nodes at the crossing is in "
-                "contact after the equilibrium stage; the corners rebound 1-2 mm apart and the rock around "
-                "the crossing carries the load in tension (+2 MPa)",
+                reason="known defect (docs/caving.md): a node bears on one facet at a time, so the "
+                "prestressed corners at the crossing, pushed diagonally, are driven 1.3 mm apart and the "
+                "rock around the crossing carries the load in tension (+2 MPa)",
             ),
         ),
         pytest.param(
