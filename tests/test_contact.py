@@ -291,7 +291,7 @@ def _joint_block(kind: str) -> fdem.Simulation:
             marks=pytest.mark.xfail(
                 strict=True,
                 reason="known defect (docs/caving.md): a node bears on one facet at a time, so the "
-                "prestressed corners at the crossing, pushed diagonally, are driven 1.3 mm apart and the "
+                "prestressed corners at the crossing, pushed diagonally, are driven 1.3 mm away and the "
                 "rock around the crossing carries the load in tension (+2 MPa)",
             ),
         ),
