@@ -362,6 +362,23 @@ def test_checkpoint_metadata_is_plain_json():
     assert set(meta) == {"fdem", "fingerprint", "settings", "series"}
 
 
+def test_a_run_description_from_before_mass_scaling_still_restores(tmp_path):
+    """A checkpoint whose run description predates the ``mass_scaling``
+    setting (format 1) restores, runs and takes settings changes, with
+    mass scaling off."""
+    mesh = fdem.Mesh.rectangle(1.0, 1.0, 2, 2)
+    model = fdem.Model(mesh, material=fdem.Elastic(E=60e9, nu=0.25, rho=3100.0))
+    sim = fdem.Simulation(model, threads=1)
+    sim.step(3)
+    meta = json.loads(sim._meta())
+    del meta["settings"]["mass_scaling"]
+    sim._core.write_checkpoint(str(tmp_path / "old.ckpt"), json.dumps(meta).encode())
+    back = fdem.Simulation.from_checkpoint(tmp_path / "old.ckpt", model, threads=1)
+    back.configure(safety=0.5)
+    back.step(2)
+    assert back.steps == 5 and back.added_mass == 0.0
+
+
 def resident_mb() -> float:
     """Resident set size of this process (MB), from /proc (Linux)."""
     with open("/proc/self/status") as f:

@@ -490,7 +490,8 @@ class Simulation:
             )
         self = cls.__new__(cls)
         self.model = model
-        self._settings = settings
+        # a format-1 checkpoint's run description predates mass scaling
+        self._settings = {"mass_scaling": None, **settings}
         self._fingerprint = mine
         self._core = core
         self._series = {}

@@ -440,16 +440,7 @@ impl Simulation {
             nodes.iter().map(|&v| (self.nodes.mass[v as usize], self.whole_step_velocity(v as usize))).collect();
         for &v in &nodes {
             // in ascending element order, as `rebuild_structure` sums
-            let mut m = 0.0;
-            for &i in self.node_elems.row(v as usize) {
-                let e = (i / 3) as usize;
-                let t = self.elems.conn[e];
-                let x = [self.nodes.x0[t[0] as usize], self.nodes.x0[t[1] as usize], self.nodes.x0[t[2] as usize]];
-                m += fdem_element::lumped_mass(
-                    self.materials[self.elems.material[e] as usize].density * self.elems.mass_scale[e],
-                    fdem_element::signed_area(&x),
-                );
-            }
+            let m = self.node_elems.row(v as usize).iter().fold(0.0, |m, &i| m + self.nodal_mass_of((i / 3) as usize));
             self.nodes.mass[v as usize] = m;
         }
         if started {

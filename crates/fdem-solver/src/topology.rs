@@ -127,6 +127,18 @@ pub(crate) fn active_node_elements(n_nodes: usize, conn: &[[u32; 3]], active: &[
 }
 
 impl crate::simulation::Simulation {
+    /// The lumped mass element `e` gives each of its nodes (kg per unit
+    /// thickness): its density times its mass-scaling factor, over its
+    /// reference area, a third each.
+    pub(crate) fn nodal_mass_of(&self, e: usize) -> f64 {
+        let t = self.elems.conn[e];
+        let x = [self.nodes.x0[t[0] as usize], self.nodes.x0[t[1] as usize], self.nodes.x0[t[2] as usize]];
+        fdem_element::lumped_mass(
+            self.materials[self.elems.material[e] as usize].density * self.elems.mass_scale[e],
+            fdem_element::signed_area(&x),
+        )
+    }
+
     /// Rebuilds everything derived from the connectivity after a topology
     /// change except forces and the stable step: node→element lists, lumped
     /// masses, the free surfaces (facet laws by ancestor pairs), pressure
@@ -143,11 +155,7 @@ impl crate::simulation::Simulation {
             if !self.elems.active[e] {
                 continue;
             }
-            let x = [self.nodes.x0[t[0] as usize], self.nodes.x0[t[1] as usize], self.nodes.x0[t[2] as usize]];
-            let nodal = fdem_element::lumped_mass(
-                self.materials[self.elems.material[e] as usize].density * self.elems.mass_scale[e],
-                fdem_element::signed_area(&x),
-            );
+            let nodal = self.nodal_mass_of(e);
             for &v in t {
                 self.nodes.mass[v as usize] += nodal;
             }
