@@ -5,7 +5,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use fdem_benches::block_grid;
-use fdem_contact::narrow::{self, ContactPartial, FacetFrame, NarrowInputs};
+use fdem_contact::narrow::{self, ContactPartial, Contacts, FacetFrame, NarrowInputs};
 use fdem_contact::{BroadPhase, ContactState, InterfaceLaw, NodeContact, Surface};
 
 fn contact(c: &mut Criterion) {
@@ -54,8 +54,9 @@ fn contact(c: &mut Criterion) {
         let nb = surface.nodes.len();
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            let mut states = vec![ContactState::default(); nb];
-            let mut out = vec![NodeContact::default(); nb];
+            let (mut states, mut corner_states) =
+                (vec![ContactState::default(); nb], vec![ContactState::default(); nb]);
+            let (mut out, mut corner_out) = (vec![NodeContact::default(); nb], vec![NodeContact::default(); nb]);
             let mut partials = vec![ContactPartial::default(); nb.div_ceil(fdem_contact::CHUNK)];
             let laws = [law];
             let mut frames = vec![FacetFrame::default(); surface.facets.len()];
@@ -75,7 +76,13 @@ fn contact(c: &mut Criterion) {
                             laws: &laws,
                             dt: 1e-6,
                         };
-                        narrow::evaluate(&inp, &mut states, &mut out, &mut partials)
+                        let c = Contacts {
+                            states: &mut states,
+                            corner_states: &mut corner_states,
+                            out: &mut out,
+                            corner_out: &mut corner_out,
+                        };
+                        narrow::evaluate(&inp, c, &mut partials)
                     })
                 })
             });

@@ -368,7 +368,13 @@ def run_caving(
     _plot_energy(out / "caving_energy.csv", out / "energy.png")
     e = sim.energies()
     x = sim.positions()
-    caved = sim.active() & (x[sim.triangles()].mean(axis=1)[:, 1] < BOTTOM)
+    y = x[sim.triangles()].mean(axis=1)[:, 1]
+    caved = sim.active() & (y < BOTTOM)
+    # rock (not support) that has fallen into the undercut: below the top of
+    # the support layer, which every rock element started above
+    level = BOTTOM + case.support
+    y_ref = sim.reference_positions()[sim.triangles()].mean(axis=1)[:, 1]
+    fallen = sim.active() & (y_ref >= level) & (y < level)
     # what the balance is measured against: the energy put in since
     # equilibrium (work of gravity, the top pressure and the supports)
     supplied = abs(e["external_work"]) + abs(e["support_work"]) + e["kinetic_initial"] + e["elastic_initial"]
@@ -384,6 +390,7 @@ def run_caving(
         "undercut_stages": sim.stages_done,
         "fragments": int(len(frags["area"])),
         "largest_fragment_m2": float(frags["area"][0]) if len(frags["area"]) else 0.0,
+        "fallen_area_m2": float(sim.areas()[fallen].sum()),
         "caved_area_m2": float(sim.areas()[caved].sum()),
         "time_step_s": sim.time_step,
         "added_mass_fraction": sim.added_mass / (sim.masses().sum() - sim.added_mass),

@@ -29,7 +29,8 @@ def run_demo(out: Path, *, quick: bool = True, progress: bool = True) -> dict[st
     shutil.copyfile(out / fig5, picture)
     print(
         f"caved: {summary['cracks_inserted']} cracks, {summary['fragments']} fragments,"
-        f" {summary['caved_area_m2']:.0f} m² of rock below the support level at t = {summary['simulated_s']:.2f} s;"
+        f" {summary['fallen_area_m2']:.0f} m² of rock fallen into the undercut"
+        f" ({summary['caved_area_m2']:.0f} m² below its floor) at t = {summary['simulated_s']:.2f} s;"
         f" energy balance residual {100 * summary['energy_residual_J'] / summary['energy_supplied_J']:.2f}%"
         f" of the work supplied"
     )

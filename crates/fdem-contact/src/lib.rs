@@ -36,5 +36,9 @@ pub type Vec2 = [f64; 2];
 /// not depend on the thread count.
 pub const CHUNK: usize = 1024;
 
+/// Two adjacent facets whose normals differ by less than 30° continue one
+/// surface; more is a corner.
+pub(crate) const SMOOTH_COS: f64 = 0.866;
+
 /// Marks "none" in index arrays.
 pub const NONE: u32 = u32::MAX;

@@ -36,6 +36,15 @@ pub struct Surface {
     pub index_of: Vec<u32>,
     /// For every boundary node (index in `nodes`) the facets it belongs to.
     pub node_facets: Csr,
+    /// For every boundary node at a corner of its body (its two facets'
+    /// normals more than 30° apart in the reference configuration, see
+    /// [`Surface::find_faces`]) the facet ending at it and the facet starting
+    /// from it: each face bears on the other bodies by itself (two contacts
+    /// per corner node). `[NONE, NONE]` for a node on a smooth stretch of
+    /// surface (one contact, along the node's mean normal) or on more than
+    /// two facets. Derived data: not saved, rebuilt on restore.
+    #[serde(skip)]
+    pub faces: Vec<[u32; 2]>,
 }
 
 impl Surface {
@@ -80,7 +89,45 @@ impl Surface {
                 .enumerate()
                 .flat_map(|(k, f)| f.nodes.map(|n| (index_of[n as usize] as usize, k as u32))),
         );
-        Self { facets: surface_facets, nodes, index_of, node_facets }
+        let mut surface = Self { facets: surface_facets, nodes, index_of, node_facets, faces: Vec::new() };
+        surface.find_faces(x_ref);
+        surface
+    }
+
+    /// Fills [`Surface::faces`] from the reference positions `x_ref`: a
+    /// boundary node with exactly two facets, one ending and one starting at
+    /// it, whose outward normals differ by more than 30° (`n₁·n₂ <
+    /// cos 30°`) is a corner. The test is on the reference configuration,
+    /// so a node's kind changes only with the topology (its angle changes
+    /// only with strain).
+    pub fn find_faces(&mut self, x_ref: &[Vec2]) {
+        let normal = |k: u32| {
+            let [a, b] = self.facets[k as usize].nodes;
+            let (pa, pb) = (x_ref[a as usize], x_ref[b as usize]);
+            let d = [pb[0] - pa[0], pb[1] - pa[1]];
+            let len = d[0].hypot(d[1]);
+            [d[1] / len, -d[0] / len]
+        };
+        self.faces = (0..self.nodes.len())
+            .map(|b| {
+                let node = self.nodes[b];
+                let row = self.node_facets.row(b);
+                if row.len() != 2 {
+                    return [NONE; 2];
+                }
+                let (k0, k1) = (row[0], row[1]);
+                let [into, from] = if self.facets[k0 as usize].nodes[1] == node { [k0, k1] } else { [k1, k0] };
+                if self.facets[into as usize].nodes[1] != node || self.facets[from as usize].nodes[0] != node {
+                    return [NONE; 2];
+                }
+                let (m, n) = (normal(into), normal(from));
+                if m[0] * n[0] + m[1] * n[1] < crate::SMOOTH_COS {
+                    [into, from]
+                } else {
+                    [NONE; 2]
+                }
+            })
+            .collect();
     }
 
     /// Largest tributary length (m) boundary node `b` can have: half of each

@@ -42,15 +42,16 @@ use crate::model::{ExcavationStage, Settings};
 use crate::passes::{Material, PressureFacet};
 use crate::simulation::{ContactStats, Elements, Nodes, PhaseTimes, Simulation};
 use crate::CHUNK;
-use fdem_contact::Surface;
+use fdem_contact::{ContactState, NodeContact, Surface};
 use fdem_element::Vec2;
 use fdem_mesh::Csr;
 
 /// The first eight bytes of every checkpoint file.
 pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
 /// The checkpoint format this build writes; it reads this one and older.
-/// Format 2 appends [`Format2`] (mass scaling) to the format-1 state.
-pub const FORMAT_VERSION: u32 = 2;
+/// Format 2 appends [`Format2`] (mass scaling) to the format-1 state,
+/// format 3 then [`Format3`] (the second contacts of corner nodes).
+pub const FORMAT_VERSION: u32 = 3;
 const HEADER: usize = 40;
 
 /// Why a checkpoint could not be written or read.
@@ -135,6 +136,8 @@ macro_rules! saved_state {
                 elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
                 pool,
             };
+            // derived data, not saved
+            sim.surface.find_faces(&sim.nodes.x0);
             // per-chunk partial sums are sized, never resized, by the passes
             if let Some(c) = sim.contact.as_mut() {
                 c.size_scratch(&sim.surface);
@@ -203,6 +206,40 @@ impl Format2 {
     }
 }
 
+/// What format 3 added, written after [`Format2`]: the second contact of
+/// every corner node (empty without contact). A file of an older format
+/// restores with none: a corner node's second face takes up contact anew
+/// (through the facet's line, so no energy appears).
+#[derive(Serialize, Deserialize)]
+struct Format3 {
+    corner_states: Vec<ContactState>,
+    corner_out: Vec<NodeContact>,
+}
+
+impl Format3 {
+    fn of(s: &Simulation) -> Self {
+        let (corner_states, corner_out) =
+            s.contact.as_ref().map_or_else(Default::default, |c| (c.corner_states.clone(), c.corner_out.clone()));
+        Format3 { corner_states, corner_out }
+    }
+
+    fn apply(self, o: &mut StateOwned) {
+        if let Some(c) = o.contact.as_mut() {
+            c.corner_states = self.corner_states;
+            c.corner_out = self.corner_out;
+        }
+    }
+
+    /// No second contacts: what an older file restores with.
+    fn none(o: &StateOwned) -> Self {
+        let nb = if o.contact.is_some() { o.surface.nodes.len() } else { 0 };
+        Format3 {
+            corner_states: vec![ContactState::default(); nb],
+            corner_out: vec![NodeContact { facet: fdem_contact::NONE, ..Default::default() }; nb],
+        }
+    }
+}
+
 fn le_u32(b: &[u8]) -> u32 {
     u32::from_le_bytes([b[0], b[1], b[2], b[3]])
 }
@@ -221,6 +258,7 @@ impl Simulation {
         // types it does not support, which a unit test rules out.
         let mut state = postcard::to_stdvec(&state_ref(self)).expect("simulation state is serialisable");
         state.extend(postcard::to_stdvec(&Format2::of(self)).expect("format-2 data is serialisable"));
+        state.extend(postcard::to_stdvec(&Format3::of(self)).expect("format-3 data is serialisable"));
         let mut out = Vec::with_capacity(HEADER + state.len() + user.len());
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -279,10 +317,16 @@ impl Simulation {
             let m = owned.elems.conn.len();
             (Format2 { mass_scale: vec![1.0; m], mass_scaling: None, mass_scaling_energy: 0.0 }, rest)
         };
+        added.apply(&mut owned);
+        let (corners, rest) = if version >= 3 {
+            postcard::take_from_bytes::<Format3>(rest).map_err(decode)?
+        } else {
+            (Format3::none(&owned), rest)
+        };
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
         }
-        added.apply(&mut owned);
+        corners.apply(&mut owned);
         check_consistent(&owned)?;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -382,7 +426,10 @@ fn check_consistent(s: &StateOwned) -> Result<(), CheckpointError> {
         return bad("the load or excavation schedule is inconsistent".into());
     }
     if let Some(c) = &s.contact {
-        if c.states.len() != nb || c.out.len() != nb || s.contact_force.len() != nb {
+        if [c.states.len(), c.out.len(), c.corner_states.len(), c.corner_out.len(), s.contact_force.len()]
+            .iter()
+            .any(|&l| l != nb)
+        {
             return bad("the contact history does not match the surface".into());
         }
         let cand = &c.broad.candidates;

@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use fdem_contact::narrow::{self, ContactPartial, FacetFrame, NarrowInputs};
+use fdem_contact::narrow::{self, ContactPartial, Contacts, FacetFrame, NarrowInputs};
 use fdem_contact::{BroadPhase, ContactState, InterfaceLaw, NodeContact, Surface};
 use fdem_element::Vec2;
 
@@ -24,6 +24,13 @@ pub(crate) struct ContactModel {
     pub states: Vec<ContactState>,
     /// Per boundary node: this step's contact.
     pub out: Vec<NodeContact>,
+    /// Per boundary node: the second contact's memory (corner nodes, see
+    /// [`Surface::faces`]; saved in checkpoint format 3).
+    #[serde(skip)]
+    pub corner_states: Vec<ContactState>,
+    /// Per boundary node: this step's second contact (corner nodes).
+    #[serde(skip)]
+    pub corner_out: Vec<NodeContact>,
     #[serde(skip)]
     pub partials: Vec<ContactPartial>,
     /// Per facet: its frame at the current evaluation (scratch).
@@ -95,6 +102,8 @@ impl ContactModel {
             broad: BroadPhase::new(spec.margin.unwrap_or(1.0)),
             states: Vec::new(),
             out: Vec::new(),
+            corner_states: Vec::new(),
+            corner_out: Vec::new(),
             partials: Vec::new(),
             frames: Vec::new(),
             pairs_evaluated: 0,
@@ -111,17 +120,21 @@ impl ContactModel {
     }
 
     /// Adapts to a new surface (after a topology change): friction memory
-    /// follows the nodes and facets that still exist. A node that was
-    /// pressing on a facet that has changed, or a node created in this
-    /// change whose origin (`origins`: new node → the old node it came
-    /// from) was, resumes its contact at the next evaluation with the
+    /// follows the nodes and facets that still exist. Each contact of a
+    /// node (one, or two at a corner) takes over the old contact of the
+    /// same node whose bearing face is the same facet, else the one whose
+    /// face points most nearly the same way (and not away from it); a node
+    /// created in this change (`origins`: new node → the old node it came
+    /// from) takes over its origin's. A contact whose facet has changed, or
+    /// that a new node inherits, resumes at the next evaluation with the
     /// penetration it has (see [`ContactState::resumed_along`]); `x` are the
     /// current positions.
     pub fn adopt(&mut self, old: Option<&Surface>, new: &Surface, x: &[Vec2], origins: &[(u32, u32)]) {
         let margin = self
             .margin
             .unwrap_or_else(|| 0.2 * new.facets.iter().map(|f| f.length).sum::<f64>() / new.facets.len().max(1) as f64);
-        let mut states = vec![ContactState::default(); new.nodes.len()];
+        let nb = new.nodes.len();
+        let mut states = [vec![ContactState::default(); nb], vec![ContactState::default(); nb]];
         if let Some(old) = old {
             // a facet keeps its key through a rebuild; a contact stays on it
             // if it still joins the same two nodes
@@ -130,16 +143,28 @@ impl ContactModel {
             for (k, f) in new.facets.iter().enumerate() {
                 facet_of_key[f.key as usize] = k as u32;
             }
-            let old_state = |node: u32| -> Option<(ContactState, f64)> {
-                let ob = old.index_of.get(node as usize).copied().unwrap_or(NONE);
-                if ob == NONE || ob as usize >= self.states.len() {
-                    return None;
+            let old_states = [&self.states, &self.corner_states];
+            let old_out = [&self.out, &self.corner_out];
+            // the old node's active contacts: (state, depth, bearing face
+            // key or NONE, the face's outward normal at `x`)
+            type Old = Option<(ContactState, f64, u32, Vec2)>;
+            let old_contacts = |node: u32| -> [Old; 2] {
+                let ob = old.index_of.get(node as usize).copied().unwrap_or(NONE) as usize;
+                if ob >= self.states.len() {
+                    return [None; 2];
                 }
-                let s = self.states[ob as usize];
-                let depth = self.out.get(ob as usize).map_or(0.0, |c| (-c.gap).max(0.0));
-                (s.facet != NONE).then_some((s, depth))
+                let faces = old.faces.get(ob).copied().unwrap_or([NONE; 2]);
+                std::array::from_fn(|k| {
+                    let s = *old_states[k].get(ob)?;
+                    let depth = old_out[k].get(ob).map_or(0.0, |c| (-c.gap).max(0.0));
+                    let (key, n) = match faces[k] {
+                        NONE => (NONE, mean_normal(old, x, ob)),
+                        f => (old.facets[f as usize].key, facet_normal(old, x, f)),
+                    };
+                    (s.facet != NONE).then_some((s, depth, key, n))
+                })
             };
-            let resumed = |(s, depth): (ContactState, f64)| -> ContactState {
+            let resumed = |s: ContactState, depth: f64| -> ContactState {
                 let [a, b] = old.facets[s.facet as usize].nodes;
                 let (pa, pb) = (x[a as usize], x[b as usize]);
                 ContactState {
@@ -150,25 +175,45 @@ impl ContactModel {
                 }
             };
             for (b, &node) in new.nodes.iter().enumerate() {
-                let Some((s, depth)) = old_state(node) else {
-                    // a node created by this change inherits its origin's contact
-                    let origin = origins.binary_search_by_key(&node, |&(n, _)| n).ok().map(|i| origins[i].1);
-                    if let Some(s) = origin.and_then(&old_state) {
-                        states[b] = resumed(s);
+                let mut from = old_contacts(node);
+                // a node created by this change inherits its origin's contacts
+                let created = from == [None; 2] && old.index_of.get(node as usize).is_none_or(|&i| i == NONE);
+                if created {
+                    match origins.binary_search_by_key(&node, |&(n, _)| n) {
+                        Ok(i) => from = old_contacts(origins[i].1),
+                        Err(_) => continue,
                     }
-                    continue;
-                };
-                let of = &old.facets[s.facet as usize];
-                let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
-                states[b] = if f != NONE && new.facets[f as usize].nodes == of.nodes {
-                    ContactState { facet: f, elastic_gap: s.elastic_gap, resumed_along: None, depth }
-                } else {
-                    resumed((s, depth))
-                };
+                }
+                let faces = new.faces[b];
+                let single = faces[0] == NONE;
+                for (k, slot) in states.iter_mut().enumerate().take(if single { 1 } else { 2 }) {
+                    let (key, n) = if single {
+                        (NONE, mean_normal(new, x, b))
+                    } else {
+                        (new.facets[faces[k] as usize].key, facet_normal(new, x, faces[k]))
+                    };
+                    let same_face = |o: &Old| o.is_some_and(|(_, _, ok, _)| ok != NONE && ok == key);
+                    let pick = from.iter().find(|o| same_face(o)).copied().flatten().or_else(|| {
+                        // the old contact whose face points most nearly the same way
+                        let dot = |o: &(ContactState, f64, u32, Vec2)| o.3[0] * n[0] + o.3[1] * n[1];
+                        from.iter().flatten().filter(|o| dot(o) > 0.0).max_by(|p, q| dot(p).total_cmp(&dot(q))).copied()
+                    });
+                    let Some((s, depth, ..)) = pick else { continue };
+                    let of = &old.facets[s.facet as usize];
+                    let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
+                    slot[b] = if !created && f != NONE && new.facets[f as usize].nodes == of.nodes {
+                        ContactState { facet: f, elastic_gap: s.elastic_gap, resumed_along: None, depth }
+                    } else {
+                        resumed(s, depth)
+                    };
+                }
             }
         }
-        self.states = states;
-        self.out = vec![NodeContact { facet: NONE, ..Default::default() }; new.nodes.len()];
+        let [first, second] = states;
+        self.states = first;
+        self.corner_states = second;
+        self.out = vec![NodeContact { facet: NONE, ..Default::default() }; nb];
+        self.corner_out = self.out.clone();
         self.size_scratch(new);
         match old {
             Some(old) => self.broad.carry_over(old, new, x, margin),
@@ -204,8 +249,14 @@ impl ContactModel {
             laws: &self.laws,
             dt,
         };
-        narrow::evaluate(&inp, &mut self.states, &mut self.out, &mut self.partials);
-        narrow::assemble(surface, &self.out, forces, damping);
+        let c = Contacts {
+            states: &mut self.states,
+            corner_states: &mut self.corner_states,
+            out: &mut self.out,
+            corner_out: &mut self.corner_out,
+        };
+        narrow::evaluate(&inp, c, &mut self.partials);
+        narrow::assemble(surface, [&self.out, &self.corner_out], forces, damping);
         let mut sum = ContactPartial::default();
         for p in &self.partials {
             sum.pairs += p.pairs;
@@ -215,5 +266,30 @@ impl ContactModel {
         }
         self.pairs_evaluated += sum.pairs;
         sum
+    }
+}
+
+/// Outward normal (unit) of facet `f` of `surface` at positions `x`.
+fn facet_normal(surface: &Surface, x: &[Vec2], f: u32) -> Vec2 {
+    let [a, b] = surface.facets[f as usize].nodes;
+    let (pa, pb) = (x[a as usize], x[b as usize]);
+    let d = [pb[0] - pa[0], pb[1] - pa[1]];
+    let len = d[0].hypot(d[1]);
+    [d[1] / len, -d[0] / len]
+}
+
+/// Mean outward normal (unit) of boundary node `b` of `surface` at `x`:
+/// the normalised sum of its facets' normals.
+fn mean_normal(surface: &Surface, x: &[Vec2], b: usize) -> Vec2 {
+    let mut n = [0.0; 2];
+    for &f in surface.node_facets.row(b) {
+        let m = facet_normal(surface, x, f);
+        n = [n[0] + m[0], n[1] + m[1]];
+    }
+    let len = n[0].hypot(n[1]);
+    if len > 0.0 {
+        [n[0] / len, n[1] / len]
+    } else {
+        n
     }
 }

@@ -291,12 +291,14 @@ impl Simulation {
         self.surface.facets.iter().map(|f| (f.nodes, f.law)).collect()
     }
 
-    /// The active contacts of the last step.
+    /// The active contacts of the last step: every node's first contact,
+    /// then the second contacts of corner nodes.
     pub fn contacts(&self) -> Vec<ContactInfo> {
         let Some(c) = &self.contact else { return Vec::new() };
         c.out
             .iter()
             .enumerate()
+            .chain(c.corner_out.iter().enumerate())
             .filter(|(_, o)| o.facet != NONE)
             .map(|(b, o)| ContactInfo {
                 node: self.surface.nodes[b],

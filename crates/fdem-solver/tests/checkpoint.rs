@@ -3,7 +3,10 @@
 
 mod common;
 use common::square;
-use fdem_solver::{CheckpointError, Constraint, LawSpec, MaterialSpec, ModelSpec, Simulation, CHECKPOINT_FORMAT};
+use fdem_solver::{
+    CheckpointError, Constraint, ContactSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Simulation,
+    CHECKPOINT_FORMAT,
+};
 
 /// A damped, gravity-loaded plate of `n × n` cells, supported at the bottom,
 /// with a non-uniform initial velocity so every array carries information.
@@ -117,37 +120,75 @@ fn a_consistent_checksum_over_inconsistent_data_is_refused() {
     assert!(matches!(e, CheckpointError::Invalid(_)), "{e}");
 }
 
+/// `bytes` as an older format would have written it: the last `block`
+/// bytes of the state cut off, the version set to `version`, resealed.
+fn downgrade(bytes: &[u8], version: u32, block: usize) -> Vec<u8> {
+    let s_len = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
+    let mut old = bytes[..40].to_vec();
+    old.extend_from_slice(&bytes[40..40 + s_len - block]);
+    old.extend_from_slice(&bytes[40 + s_len..]);
+    old[8..12].copy_from_slice(&version.to_le_bytes());
+    old[16..24].copy_from_slice(&((s_len - block) as u64).to_le_bytes());
+    let crc = crc32fast::hash(&old[40..]);
+    old[32..36].copy_from_slice(&crc.to_le_bytes());
+    reseal(&mut old);
+    old
+}
+
+/// Bytes of a postcard varint holding `n`.
+fn varint(n: usize) -> usize {
+    (usize::BITS - n.max(1).leading_zeros()).div_ceil(7) as usize
+}
+
 #[test]
 fn a_format_1_file_still_reads_with_physical_masses() {
     // format 2 appends the mass-scaling block (density factors, setting,
-    // energy term) to the format-1 state; cut it off, mark the file as
+    // energy term) to the format-1 state, format 3 the corner contacts
+    // (two empty lists without contact); cut them off, mark the file as
     // format 1 and reseal: it must read back as the same run
     let mut a = Simulation::new(plate(6), 1).unwrap();
     a.step(30).unwrap();
-    let v2 = a.checkpoint_bytes(b"meta");
+    let v3 = a.checkpoint_bytes(b"meta");
     let m = a.triangles().len();
-    // postcard: varint length + m f64, `None` (one byte), one f64
-    let varint = if m < 128 {
-        1
-    } else if m < 16384 {
-        2
-    } else {
-        3
-    };
-    let block = varint + 8 * m + 1 + 8;
-    let s_len = u64::from_le_bytes(v2[16..24].try_into().unwrap()) as usize;
-    let mut v1 = v2[..40].to_vec();
-    v1.extend_from_slice(&v2[40..40 + s_len - block]);
-    v1.extend_from_slice(&v2[40 + s_len..]);
-    v1[8..12].copy_from_slice(&1u32.to_le_bytes());
-    v1[16..24].copy_from_slice(&((s_len - block) as u64).to_le_bytes());
-    let crc = crc32fast::hash(&v1[40..]);
-    v1[32..36].copy_from_slice(&crc.to_le_bytes());
-    reseal(&mut v1);
+    // postcard: varint length + m f64, `None` (one byte), one f64; two
+    // zero lengths
+    let v1 = downgrade(&v3, 1, varint(m) + 8 * m + 1 + 8 + 2);
     let (mut b, user) = Simulation::from_checkpoint_bytes(&v1, 1).unwrap();
     assert_eq!(user, b"meta");
     assert!(b.mass_scale().iter().all(|&s| s == 1.0) && b.mass_scale().len() == m);
-    assert!(b.checkpoint_bytes(b"meta") == v2, "format 1 read back differs");
+    assert!(b.checkpoint_bytes(b"meta") == v3, "format 1 read back differs");
+    a.step(20).unwrap();
+    b.step(20).unwrap();
+    assert!(a.checkpoint_bytes(b"") == b.checkpoint_bytes(b""));
+}
+
+#[test]
+fn a_format_2_file_with_contact_reads_without_corner_contacts() {
+    // the plate with contact on its own surface, before its first step:
+    // every corner's second contact is empty, which is what a format-2
+    // file restores with, so the two must continue identically
+    let mut spec = plate(6);
+    spec.contact = Some(ContactSpec {
+        laws: vec![InterfaceSpec {
+            normal_stiffness: 1e10,
+            shear_stiffness: 1e10,
+            friction: 0.5,
+            cohesion: 0.0,
+            damping_ratio: 0.1,
+        }],
+        facet_laws: Vec::new(),
+        crack_law: 0,
+        margin: None,
+    });
+    let mut a = Simulation::new(spec, 1).unwrap();
+    let v3 = a.checkpoint_bytes(b"");
+    let nb = 4 * 6;
+    // two lists of nb: an empty memory is 22 bytes (facet u32::MAX as a
+    // 5-byte varint, two f64, `None`), an empty contact 70 (facet, 7 f64,
+    // a bool)
+    let v2 = downgrade(&v3, 2, 2 * varint(nb) + nb * (22 + 70));
+    let (mut b, _) = Simulation::from_checkpoint_bytes(&v2, 1).unwrap();
+    assert!(b.checkpoint_bytes(b"") == v3, "format 2 read back differs");
     a.step(20).unwrap();
     b.step(20).unwrap();
     assert!(a.checkpoint_bytes(b"") == b.checkpoint_bytes(b""));
