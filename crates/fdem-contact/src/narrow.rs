@@ -253,11 +253,13 @@ pub struct NarrowInputs<'a> {
 pub struct Contacts<'a> {
     /// First contact's memory, per boundary node.
     pub states: &'a mut [ContactState],
-    /// Second contact's memory (corner nodes only; cleared elsewhere).
+    /// Second contact's memory, per boundary node: used at corner nodes
+    /// only; elsewhere it must be empty, and it is left untouched.
     pub corner_states: &'a mut [ContactState],
     /// First contact of this step, per boundary node.
     pub out: &'a mut [NodeContact],
-    /// Second contact of this step (facet [`NONE`] but at corners).
+    /// Second contact of this step, per boundary node (facet [`NONE`] but
+    /// at corners; left untouched elsewhere).
     pub corner_out: &'a mut [NodeContact],
 }
 
@@ -277,7 +279,7 @@ pub fn evaluate(inp: &NarrowInputs<'_>, c: Contacts<'_>, partials: &mut [Contact
             let mut acc = ContactPartial::default();
             for j in 0..st.len() {
                 let b = c * CHUNK + j;
-                [oc[j], oc2[j]] = evaluate_node(inp, b, [&mut st[j], &mut st2[j]], &mut acc);
+                evaluate_node(inp, b, [&mut st[j], &mut st2[j]], [&mut oc[j], &mut oc2[j]], &mut acc);
             }
             *part = acc;
         });
@@ -358,8 +360,9 @@ fn evaluate_node(
     inp: &NarrowInputs<'_>,
     b: usize,
     states: [&mut ContactState; 2],
+    out: [&mut NodeContact; 2],
     acc: &mut ContactPartial,
-) -> [NodeContact; 2] {
+) {
     let node = inp.surface.nodes[b] as usize;
     let s = inp.x[node];
     let faces = inp.surface.faces[b];
@@ -418,12 +421,13 @@ fn evaluate_node(
             }
         }
     }
-    let mut out = [NodeContact { facet: NONE, ..Default::default() }; 2];
-    for k in 0..2 {
+    // a smooth node's second contact stays empty from the topology change
+    // that made it smooth (`adopt` starts every memory empty): not touched
+    debug_assert!(slots == 2 || (states[1].facet == NONE && out[1].facet == NONE));
+    for k in 0..slots {
         let face = (slots == 2).then(|| faces[k]);
-        out[k] = respond(inp, b, node, &mut *states[k], best[k], face, acc);
+        *out[k] = respond(inp, b, node, &mut *states[k], best[k], face, acc);
     }
-    out
 }
 
 /// The forces of one contact of boundary node `b` (mesh id `node`) on the
@@ -522,7 +526,8 @@ fn respond(
 pub fn assemble(surface: &Surface, contacts: [&[NodeContact]; 2], forces: &mut [Vec2], damping: &mut [Vec2]) {
     forces.iter_mut().for_each(|f| *f = [0.0; 2]);
     damping.iter_mut().for_each(|f| *f = [0.0; 2]);
-    for (b, c) in contacts[0].iter().enumerate().chain(contacts[1].iter().enumerate()) {
+    let corners = surface.faces.iter().enumerate().filter(|(_, f)| f[0] != NONE).map(|(b, _)| (b, &contacts[1][b]));
+    for (b, c) in contacts[0].iter().enumerate().chain(corners) {
         if c.facet == NONE {
             continue;
         }
