@@ -12,7 +12,7 @@ Results (VTU series, the paper's Fig. 4 and Fig. 5 kinds of pictures, probe
 stresses at the Table 2 points, fragment sizes, the energy history and a
 summary) go into one directory; see ``fdem.caving``.
 
-    python examples/block_caving.py            # the paper's scale (135 672 triangles)
+    python examples/block_caving.py            # the paper's scale (78 216 triangles)
     python examples/block_caving.py --quick    # a coarse version (4 m elements, to 0.8 s)
 
 Watch ``energy_residual_J`` in the summary and ``caving_energy.csv``: the
@@ -33,7 +33,7 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--quick", action="store_true", help="coarse mesh and joints, shorter run")
     ap.add_argument("--out", default=None, help="output directory (default: caving_output[_quick])")
     ap.add_argument("--until", type=float, default=None, help="simulated time (s); default 3.5 (quick: 0.8)")
-    ap.add_argument("--size", type=float, default=None, help="element size (m); default 0.75 (quick: 4)")
+    ap.add_argument("--size", type=float, default=None, help="element size (m); default 1.0 (quick: 4)")
     ap.add_argument(
         "--min-size",
         type=float,

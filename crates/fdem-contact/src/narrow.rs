@@ -671,4 +671,78 @@ mod tests {
         assert!(out.iter().all(|o| o[node_s].facet == NONE));
         assert_eq!(partials.iter().map(|p| p.stored).sum::<f64>(), 0.0);
     }
+
+    /// Four unit squares meeting at the origin (an X crossing of two
+    /// joints); the top-left one is pushed diagonally into the others by δ
+    /// in each direction, as the prestressed corner of a block at a joint
+    /// crossing is. Its corner node must bear with each face: on a facet
+    /// with normal +y (its bottom face) and on one with normal −x (its
+    /// right face), each with its own half facet as tributary length, so
+    /// that the node receives `k δ ½ (−1, 1)` (closed form, no dashpot, no
+    /// friction). With one contact per node it received one of the two
+    /// components only.
+    #[test]
+    fn a_corner_pushed_into_a_crossing_bears_with_each_face() {
+        let (k, delta, dt) = (1e9, 1e-3, 1e-4);
+        // squares counter-clockwise: top-left (pushed), top-right,
+        // bottom-left, bottom-right
+        let origins = [[-1.0, 0.0], [0.0, 0.0], [-1.0, -1.0], [0.0, -1.0]];
+        let mut x = Vec::new();
+        let mut facets = Vec::new();
+        let mut apex = Vec::new();
+        for (q, o) in origins.iter().enumerate() {
+            let shift = if q == 0 { [delta, -delta] } else { [0.0, 0.0] };
+            let base = x.len() as u32;
+            for c in [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]] {
+                x.push([o[0] + c[0] + shift[0], o[1] + c[1] + shift[1]]);
+            }
+            for j in 0..4u32 {
+                facets.push(([base + j, base + (j + 1) % 4], 0u16));
+                apex.push(x[(base + (j + 2) % 4) as usize]);
+            }
+        }
+        let surface = Surface::new(x.len(), &facets, &x, &apex);
+        let corner = surface.index_of[1] as usize; // the pushed square's corner at the origin
+        assert_ne!(surface.faces[corner][0], NONE);
+        let mut broad = crate::BroadPhase::new(0.3);
+        broad.build(&surface, &x);
+        // the pushed square moved in by δ within this step: its contacts
+        // are entered through the facets' lines
+        let v: Vec<Vec2> = (0..x.len()).map(|i| if i < 4 { [delta / dt, -delta / dt] } else { [0.0; 2] }).collect();
+        let mass = vec![1.0; x.len()];
+        let mut frames = vec![FacetFrame::default(); surface.facets.len()];
+        facet_frames(&surface, &x, &mut frames);
+        let laws = [InterfaceLaw::new(k, k, 0.0, 0.0, 0.0).unwrap()];
+        let inp = NarrowInputs {
+            x: &x,
+            v: &v,
+            mass: &mass,
+            surface: &surface,
+            frames: &frames,
+            candidates: &broad.candidates,
+            laws: &laws,
+            dt,
+        };
+        let nb = surface.nodes.len();
+        let (mut states, mut corner_states) = (vec![ContactState::default(); nb], vec![ContactState::default(); nb]);
+        let mut out = vec![NodeContact { facet: NONE, ..Default::default() }; nb];
+        let mut corner_out = out.clone();
+        let mut partials = vec![ContactPartial::default(); nb.div_ceil(CHUNK)];
+        let c = Contacts {
+            states: &mut states,
+            corner_states: &mut corner_states,
+            out: &mut out,
+            corner_out: &mut corner_out,
+        };
+        evaluate(&inp, c, &mut partials);
+        let (bottom, right) = (out[corner], corner_out[corner]);
+        let half = 0.5 * k * delta;
+        for (c, expected) in [(bottom, [0.0, half]), (right, [-half, 0.0])] {
+            assert_ne!(c.facet, NONE);
+            assert!((c.gap + delta).abs() < 1e-12, "{c:?}");
+            for d in 0..2 {
+                assert!((c.force[d] - expected[d]).abs() < 1e-6 * half, "{c:?}, expected {expected:?}");
+            }
+        }
+    }
 }
