@@ -82,6 +82,20 @@ pub struct NodeContact {
     pub tangential_force: f64,
     /// Whether the contact slipped in this step.
     pub slipping: bool,
+    /// The facet's two nodes as boundary-node indices, for the sequential
+    /// assembly (looked up here, in parallel, so that the assembly reads
+    /// nothing else). Derived: not saved, see [`NodeContact::locate`].
+    #[serde(skip)]
+    pub ends: [u32; 2],
+}
+
+impl NodeContact {
+    /// Sets [`NodeContact::ends`] from the surface (after a restore).
+    pub fn locate(&mut self, surface: &Surface) {
+        if self.facet != NONE {
+            self.ends = surface.facets[self.facet as usize].nodes.map(|n| surface.index_of[n as usize]);
+        }
+    }
 }
 
 /// Sums of one chunk of nodes.
@@ -426,28 +440,39 @@ fn evaluate_node(
     debug_assert!(slots == 2 || (states[1].facet == NONE && out[1].facet == NONE));
     for k in 0..slots {
         let face = (slots == 2).then(|| faces[k]);
-        *out[k] = respond(inp, b, node, &mut *states[k], best[k], face, acc);
+        match best[k] {
+            Some(best) => *out[k] = respond(inp, b, node, &mut *states[k], best, face, acc),
+            // no contact: clear what is not clear already (most boundary
+            // nodes touch nothing, step after step; rewriting their memory
+            // and output cost a measurable share of the step in memory
+            // traffic)
+            None => {
+                if *states[k] != ContactState::default() {
+                    *states[k] = ContactState::default();
+                }
+                if out[k].facet != NONE {
+                    *out[k] = NodeContact { facet: NONE, ..Default::default() };
+                }
+            }
+        }
     }
 }
 
 /// The forces of one contact of boundary node `b` (mesh id `node`) on the
-/// facet chosen by [`evaluate_node`] (`best`: rank, facet, ξ, gap), or no
-/// contact; `face` is the node's own facet that bears at a corner (`None`
-/// for a node on a smooth stretch, which bears with all its facets).
+/// facet chosen by [`evaluate_node`] (`best`: rank, facet, ξ, gap); `face`
+/// is the node's own facet that bears at a corner (`None` for a node on a
+/// smooth stretch, which bears with all its facets).
 #[inline]
 fn respond(
     inp: &NarrowInputs<'_>,
     b: usize,
     node: usize,
     state: &mut ContactState,
-    best: Option<(u8, u32, f64, f64)>,
+    best: (u8, u32, f64, f64),
     face: Option<u32>,
     acc: &mut ContactPartial,
 ) -> NodeContact {
-    let Some((rank, f, xi, gap)) = best else {
-        *state = ContactState::default();
-        return NodeContact { facet: NONE, ..Default::default() };
-    };
+    let (rank, f, xi, gap) = best;
     let continues = rank == 1;
     let xi = xi.clamp(0.0, 1.0);
     let facet = &inp.surface.facets[f as usize];
@@ -516,6 +541,7 @@ fn respond(
         normal_force,
         tangential_force: ft,
         slipping: work > 0.0,
+        ends: [inp.surface.index_of[ia], inp.surface.index_of[ib]],
     }
 }
 
@@ -531,9 +557,7 @@ pub fn assemble(surface: &Surface, contacts: [&[NodeContact]; 2], forces: &mut [
         if c.facet == NONE {
             continue;
         }
-        let facet = &surface.facets[c.facet as usize];
-        let fa = surface.index_of[facet.nodes[0] as usize] as usize;
-        let fb = surface.index_of[facet.nodes[1] as usize] as usize;
+        let [fa, fb] = c.ends.map(|i| i as usize);
         for (out, f) in [(&mut *forces, c.force), (&mut *damping, c.damping_force)] {
             for d in 0..2 {
                 out[b][d] += f[d];

@@ -138,6 +138,11 @@ macro_rules! saved_state {
             };
             // derived data, not saved
             sim.surface.find_faces(&sim.nodes.x0);
+            if let Some(c) = sim.contact.as_mut() {
+                for o in c.out.iter_mut().chain(c.corner_out.iter_mut()) {
+                    o.locate(&sim.surface);
+                }
+            }
             // per-chunk partial sums are sized, never resized, by the passes
             if let Some(c) = sim.contact.as_mut() {
                 c.size_scratch(&sim.surface);

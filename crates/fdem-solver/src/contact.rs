@@ -156,12 +156,15 @@ impl ContactModel {
                 let faces = old.faces.get(ob).copied().unwrap_or([NONE; 2]);
                 std::array::from_fn(|k| {
                     let s = *old_states[k].get(ob)?;
+                    if s.facet == NONE {
+                        return None;
+                    }
                     let depth = old_out[k].get(ob).map_or(0.0, |c| (-c.gap).max(0.0));
                     let (key, n) = match faces[k] {
                         NONE => (NONE, mean_normal(old, x, ob)),
                         f => (old.facets[f as usize].key, facet_normal(old, x, f)),
                     };
-                    (s.facet != NONE).then_some((s, depth, key, n))
+                    Some((s, depth, key, n))
                 })
             };
             let resumed = |s: ContactState, depth: f64| -> ContactState {
@@ -183,6 +186,9 @@ impl ContactModel {
                         Ok(i) => from = old_contacts(origins[i].1),
                         Err(_) => continue,
                     }
+                }
+                if from == [None; 2] {
+                    continue;
                 }
                 let faces = new.faces[b];
                 let single = faces[0] == NONE;
