@@ -234,19 +234,21 @@ impl BroadPhase {
         }
         let m = margin;
         let max_key = new.facets.last().map_or(0, |f| f.key as usize + 1);
-        // old facet → new facet where it is kept, else NONE
-        let old_to_new: Vec<u32> = old
-            .facets
-            .iter()
-            .map(|f| {
-                let i = key_index(new, f.key);
-                if i != crate::NONE && new.facets[i as usize].nodes == f.nodes {
-                    i
-                } else {
-                    crate::NONE
-                }
-            })
-            .collect();
+        // old facet → new facet where it is kept (same key, same nodes),
+        // else NONE, and back: one walk, both lists ascend by key (binary
+        // searches took most of this function at the paper's scale)
+        let mut old_to_new = vec![crate::NONE; old.facets.len()];
+        let mut new_to_old = vec![crate::NONE; new.facets.len()];
+        let mut i = 0;
+        for (j, f) in old.facets.iter().enumerate() {
+            while i < new.facets.len() && new.facets[i].key < f.key {
+                i += 1;
+            }
+            if i < new.facets.len() && new.facets[i].key == f.key && new.facets[i].nodes == f.nodes {
+                old_to_new[j] = i as u32;
+                new_to_old[i] = j as u32;
+            }
+        }
         for (j, f) in old.facets.iter().enumerate() {
             if old_to_new[j] == crate::NONE {
                 self.bvh.remove(f.key);
@@ -256,8 +258,8 @@ impl BroadPhase {
         let mut fresh: Vec<u32> = Vec::new();
         let mut fresh_boxes: Vec<Aabb> = Vec::new();
         for (i, f) in new.facets.iter().enumerate() {
-            let j = key_index(old, f.key);
-            if j != crate::NONE && old_to_new[j as usize] == i as u32 {
+            let j = new_to_old[i];
+            if j != crate::NONE {
                 boxes.push(self.boxes[j as usize]);
             } else {
                 let bx = facet_box(x, f.nodes, 2.0 * m);
@@ -394,12 +396,6 @@ fn near(x: &[Vec2], nodes: [u32; 2], p: Vec2, margin: f64) -> bool {
     let q = [r[0] - t * d[0], r[1] - t * d[1]];
     let pad = margin * (1.0 + s);
     q[0] * q[0] + q[1] * q[1] <= pad * pad
-}
-
-/// Index of the facet with `key` in `surface` (facets are sorted by key),
-/// or `NONE`.
-fn key_index(surface: &Surface, key: u32) -> u32 {
-    surface.facets.binary_search_by_key(&key, |f| f.key).map_or(crate::NONE, |i| i as u32)
 }
 
 /// What a checkpoint keeps of a [`BroadPhase`]: everything its candidate

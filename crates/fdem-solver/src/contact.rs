@@ -31,6 +31,12 @@ pub(crate) struct ContactModel {
     /// Per boundary node: this step's second contact (corner nodes).
     #[serde(skip)]
     pub corner_out: Vec<NodeContact>,
+    /// The memory and contacts of the surface before the last topology
+    /// change, kept as buffers for the next one (scratch).
+    #[serde(skip)]
+    spare_states: [Vec<ContactState>; 2],
+    #[serde(skip)]
+    spare_out: [Vec<NodeContact>; 2],
     #[serde(skip)]
     pub partials: Vec<ContactPartial>,
     /// Per facet: its frame at the current evaluation (scratch).
@@ -56,8 +62,12 @@ impl ContactModel {
     /// Sizes the scratch buffers (per-chunk partial sums, facet frames)
     /// for `surface`: at a topology change, never in the time loop.
     pub fn size_scratch(&mut self, surface: &Surface) {
-        self.partials = vec![ContactPartial::default(); surface.nodes.len().div_ceil(fdem_contact::CHUNK)];
-        self.frames = vec![FacetFrame::default(); surface.facets.len()];
+        // resized in place: a fresh allocation at every crack insertion
+        // cost its page faults (2–9 ms at the paper's scale)
+        self.partials.clear();
+        self.partials.resize(surface.nodes.len().div_ceil(fdem_contact::CHUNK), ContactPartial::default());
+        self.frames.clear();
+        self.frames.resize(surface.facets.len(), FacetFrame::default());
     }
 
     /// Checks and builds the contact model.
@@ -104,6 +114,8 @@ impl ContactModel {
             out: Vec::new(),
             corner_states: Vec::new(),
             corner_out: Vec::new(),
+            spare_states: Default::default(),
+            spare_out: Default::default(),
             partials: Vec::new(),
             frames: Vec::new(),
             pairs_evaluated: 0,
@@ -130,11 +142,29 @@ impl ContactModel {
     /// penetration it has (see [`ContactState::resumed_along`]); `x` are the
     /// current positions.
     pub fn adopt(&mut self, old: Option<&Surface>, new: &Surface, x: &[Vec2], origins: &[(u32, u32)]) {
-        let margin = self
-            .margin
-            .unwrap_or_else(|| 0.2 * new.facets.iter().map(|f| f.length).sum::<f64>() / new.facets.len().max(1) as f64);
+        // The default margin follows the mean facet length, with
+        // hysteresis: every crack insertion changes that mean a little, and
+        // a margin that grew forced the broad phase to rebuild instead of
+        // carrying its lists over (every other insertion check at the
+        // paper's scale, 10–12 ms each). The lists, and so the results, do
+        // not depend on the margin.
+        let margin = self.margin.unwrap_or_else(|| {
+            let target = 0.2 * new.facets.iter().map(|f| f.length).sum::<f64>() / new.facets.len().max(1) as f64;
+            let current = self.broad.margin;
+            if old.is_some() && (0.8 * current..=1.25 * current).contains(&target) {
+                current
+            } else {
+                target
+            }
+        });
         let nb = new.nodes.len();
-        let mut states = [vec![ContactState::default(); nb], vec![ContactState::default(); nb]];
+        // the new memory goes into the spare buffers (no fresh allocation,
+        // whose page faults cost as much as filling them)
+        let mut states = [std::mem::take(&mut self.spare_states[0]), std::mem::take(&mut self.spare_states[1])];
+        for s in &mut states {
+            s.clear();
+            s.resize(nb, ContactState::default());
+        }
         if let Some(old) = old {
             // a facet keeps its key through a rebuild; a contact stays on it
             // if it still joins the same two nodes
@@ -145,9 +175,9 @@ impl ContactModel {
             }
             let old_states = [&self.states, &self.corner_states];
             let old_out = [&self.out, &self.corner_out];
-            // the old node's active contacts: (state, depth, bearing face
-            // key or NONE, the face's outward normal at `x`)
-            type Old = Option<(ContactState, f64, u32, Vec2)>;
+            // the old node's active contacts: (state, depth, old boundary
+            // index, bearing face or NONE)
+            type Old = Option<(ContactState, f64, usize, u32)>;
             let old_contacts = |node: u32| -> [Old; 2] {
                 let ob = old.index_of.get(node as usize).copied().unwrap_or(NONE) as usize;
                 if ob >= self.states.len() {
@@ -160,12 +190,13 @@ impl ContactModel {
                         return None;
                     }
                     let depth = old_out[k].get(ob).map_or(0.0, |c| (-c.gap).max(0.0));
-                    let (key, n) = match faces[k] {
-                        NONE => (NONE, mean_normal(old, x, ob)),
-                        f => (old.facets[f as usize].key, facet_normal(old, x, f)),
-                    };
-                    Some((s, depth, key, n))
+                    Some((s, depth, ob, faces[k]))
                 })
+            };
+            // the outward normal at `x` of an old contact's bearing face
+            let old_normal = |&(_, _, ob, face): &(ContactState, f64, usize, u32)| match face {
+                NONE => mean_normal(old, x, ob),
+                f => facet_normal(old, x, f),
             };
             let resumed = |s: ContactState, depth: f64| -> ContactState {
                 let [a, b] = old.facets[s.facet as usize].nodes;
@@ -193,15 +224,16 @@ impl ContactModel {
                 let faces = new.faces[b];
                 let single = faces[0] == NONE;
                 for (k, slot) in states.iter_mut().enumerate().take(if single { 1 } else { 2 }) {
-                    let (key, n) = if single {
-                        (NONE, mean_normal(new, x, b))
-                    } else {
-                        (new.facets[faces[k] as usize].key, facet_normal(new, x, faces[k]))
-                    };
-                    let same_face = |o: &Old| o.is_some_and(|(_, _, ok, _)| ok != NONE && ok == key);
+                    let key = if single { NONE } else { new.facets[faces[k] as usize].key };
+                    let same_face =
+                        |o: &Old| o.is_some_and(|(_, _, _, face)| face != NONE && old.facets[face as usize].key == key);
                     let pick = from.iter().find(|o| same_face(o)).copied().flatten().or_else(|| {
                         // the old contact whose face points most nearly the same way
-                        let dot = |o: &(ContactState, f64, u32, Vec2)| o.3[0] * n[0] + o.3[1] * n[1];
+                        let n = if single { mean_normal(new, x, b) } else { facet_normal(new, x, faces[k]) };
+                        let dot = |o: &(ContactState, f64, usize, u32)| {
+                            let m = old_normal(o);
+                            m[0] * n[0] + m[1] * n[1]
+                        };
                         from.iter().flatten().filter(|o| dot(o) > 0.0).max_by(|p, q| dot(p).total_cmp(&dot(q))).copied()
                     });
                     let Some((s, depth, ..)) = pick else { continue };
@@ -216,10 +248,14 @@ impl ContactModel {
             }
         }
         let [first, second] = states;
-        self.states = first;
-        self.corner_states = second;
-        self.out = vec![NodeContact { facet: NONE, ..Default::default() }; nb];
-        self.corner_out = self.out.clone();
+        self.spare_states =
+            [std::mem::replace(&mut self.states, first), std::mem::replace(&mut self.corner_states, second)];
+        let [spare0, spare1] = &mut self.spare_out;
+        for (out, spare) in [(&mut self.out, spare0), (&mut self.corner_out, spare1)] {
+            spare.clear();
+            spare.resize(nb, NodeContact { facet: NONE, ..Default::default() });
+            std::mem::swap(out, spare);
+        }
         self.size_scratch(new);
         match old {
             Some(old) => self.broad.carry_over(old, new, x, margin),
