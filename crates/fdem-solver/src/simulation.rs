@@ -2,6 +2,8 @@
 //! `setup.rs`, read-out of results in `readout.rs`.
 
 use std::sync::Arc;
+
+use rayon::prelude::*;
 use std::time::Instant;
 
 use fdem_contact::Surface;
@@ -319,11 +321,13 @@ impl Simulation {
                 }
             };
             if let Some(contact) = &self.contact {
-                for b in 0..self.surface.nodes.len() {
-                    if let Some((w, r)) = self.contact_node_frequency(contact, b) {
-                        crit = crit.min(2.0 / w * r);
-                    }
-                }
+                // parallel: a minimum does not depend on the order
+                let nodes = (0..self.surface.nodes.len()).into_par_iter().with_min_len(crate::CHUNK);
+                let least = nodes
+                    .filter_map(|b| self.contact_node_frequency(contact, b))
+                    .map(|(w, r)| 2.0 / w * r)
+                    .reduce(|| f64::INFINITY, f64::min);
+                crit = crit.min(least);
             }
             if let Some(fr) = &self.fracture {
                 // a bond adds k ℓ (1/m_a + 1/m_b) to the frequency² of its
@@ -397,22 +401,34 @@ impl Simulation {
     pub(crate) fn scale_masses(&mut self, target: f64) -> Vec<u32> {
         let beta = self.settings.stiffness_damping;
         let w_max = 2.0 / (target * target + 2.0 * target * beta).sqrt();
-        let mut need: Vec<(u32, f64)> = Vec::new();
-        for (e, &w) in self.omega.iter().enumerate() {
-            if self.elems.active[e] && w > w_max {
-                need.push((e as u32, (w / w_max) * (w / w_max)));
-            }
-        }
-        if let Some(contact) = &self.contact {
-            for b in 0..self.surface.nodes.len() {
-                let Some((w, r)) = self.contact_node_frequency(contact, b) else { continue };
-                let s = (w * target / (2.0 * r)).powi(2);
-                if s > 1.0 {
+        // the elements that need more mass, in parallel (collected in
+        // order; the list is sorted below anyway)
+        let pool = Arc::clone(&self.pool);
+        let mut need: Vec<(u32, f64)> = pool.install(|| {
+            let (omega, active) = (&self.omega, &self.elems.active);
+            let mut need: Vec<(u32, f64)> = (0..omega.len())
+                .into_par_iter()
+                .with_min_len(crate::CHUNK)
+                .filter(|&e| active[e] && omega[e] > w_max)
+                .map(|e| (e as u32, (omega[e] / w_max) * (omega[e] / w_max)))
+                .collect();
+            if let Some(contact) = &self.contact {
+                let nodes: Vec<(usize, f64)> = (0..self.surface.nodes.len())
+                    .into_par_iter()
+                    .with_min_len(crate::CHUNK)
+                    .filter_map(|b| {
+                        let (w, r) = self.contact_node_frequency(contact, b)?;
+                        let s = (w * target / (2.0 * r)).powi(2);
+                        (s > 1.0).then_some((b, s))
+                    })
+                    .collect();
+                for (b, s) in nodes {
                     let node = self.surface.nodes[b] as usize;
                     need.extend(self.node_elems.row(node).iter().map(|&i| (i / 3, s)));
                 }
             }
-        }
+            need
+        });
         if need.is_empty() {
             return Vec::new();
         }
