@@ -630,10 +630,20 @@ mod tests {
         };
         let mut states = vec![ContactState::default(); surface.nodes.len()];
         states[node_s] = ContactState { facet: last, depth: 0.01, ..Default::default() };
-        let nb = surface.nodes.len();
-        let mut out = vec![NodeContact { facet: NONE, ..Default::default() }; nb];
-        let (mut corner_states, mut corner_out) = (states.clone(), out.clone());
         assert_ne!(surface.faces[node_s][0], NONE, "the apex is a corner");
+        evaluate_once(&inp, states.clone(), states)
+    }
+
+    /// One evaluation from the given memories of both contacts: both
+    /// contacts of every node and the chunk partials.
+    fn evaluate_once(
+        inp: &NarrowInputs<'_>,
+        mut states: Vec<ContactState>,
+        mut corner_states: Vec<ContactState>,
+    ) -> ([Vec<NodeContact>; 2], Vec<ContactPartial>) {
+        let nb = states.len();
+        let mut out = vec![NodeContact { facet: NONE, ..Default::default() }; nb];
+        let mut corner_out = out.clone();
         let mut partials = vec![ContactPartial::default(); nb.div_ceil(CHUNK)];
         let c = Contacts {
             states: &mut states,
@@ -641,7 +651,7 @@ mod tests {
             out: &mut out,
             corner_out: &mut corner_out,
         };
-        evaluate(&inp, c, &mut partials);
+        evaluate(inp, c, &mut partials);
         ([out, corner_out], partials)
     }
 
@@ -747,18 +757,8 @@ mod tests {
             laws: &laws,
             dt,
         };
-        let nb = surface.nodes.len();
-        let (mut states, mut corner_states) = (vec![ContactState::default(); nb], vec![ContactState::default(); nb]);
-        let mut out = vec![NodeContact { facet: NONE, ..Default::default() }; nb];
-        let mut corner_out = out.clone();
-        let mut partials = vec![ContactPartial::default(); nb.div_ceil(CHUNK)];
-        let c = Contacts {
-            states: &mut states,
-            corner_states: &mut corner_states,
-            out: &mut out,
-            corner_out: &mut corner_out,
-        };
-        evaluate(&inp, c, &mut partials);
+        let empty = vec![ContactState::default(); surface.nodes.len()];
+        let ([out, corner_out], _) = evaluate_once(&inp, empty.clone(), empty);
         let (bottom, right) = (out[corner], corner_out[corner]);
         let half = 0.5 * k * delta;
         for (c, expected) in [(bottom, [0.0, half]), (right, [-half, 0.0])] {
