@@ -120,22 +120,37 @@ pub fn project(s: Vec2, a: Vec2, b: Vec2) -> (f64, f64, Vec2, Vec2, f64) {
 }
 
 /// The current geometry of one facet: its unit tangent `t` (first node to
-/// second) and length (m). Its outward normal is `n = (t_y, −t_x)`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// second), length (m), the position of its first node and its depth limit
+/// (m, [`SurfaceFacet::depth`](crate::SurfaceFacet::depth)). Its outward
+/// normal is `n = (t_y, −t_x)`. One record holds everything the candidate
+/// test reads, so that testing a candidate touches one cache line (the
+/// test is latency-bound: reading the facet, its frame and its first
+/// node's position from three arrays cost three cache misses).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FacetFrame {
     /// Unit tangent.
     pub t: Vec2,
     /// Length (m).
     pub len: f64,
+    /// Position of the first node (m).
+    pub a: Vec2,
+    /// Deepest penetration accepted behind the facet (m).
+    pub depth: f64,
+}
+
+impl Default for FacetFrame {
+    fn default() -> Self {
+        Self { t: [0.0; 2], len: 0.0, a: [0.0; 2], depth: f64::INFINITY }
+    }
 }
 
 impl FacetFrame {
-    /// The frame of the facet `[a, b]`.
+    /// The frame of the facet `[a, b]` (no depth limit).
     #[inline(always)]
     pub fn of(a: Vec2, b: Vec2) -> Self {
         let d = [b[0] - a[0], b[1] - a[1]];
         let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
-        Self { t: [d[0] / len, d[1] / len], len }
+        Self { t: [d[0] / len, d[1] / len], len, a, depth: f64::INFINITY }
     }
 
     /// Outward normal (unit).
@@ -161,8 +176,9 @@ impl FacetFrame {
 pub fn facet_frames(surface: &Surface, x: &[Vec2], frames: &mut [FacetFrame]) {
     frames.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
         for (j, fr) in out.iter_mut().enumerate() {
-            let [a, b] = surface.facets[c * CHUNK + j].nodes;
-            *fr = FacetFrame::of(x[a as usize], x[b as usize]);
+            let facet = &surface.facets[c * CHUNK + j];
+            let [a, b] = facet.nodes;
+            *fr = FacetFrame { depth: facet.depth, ..FacetFrame::of(x[a as usize], x[b as usize]) };
         }
     });
 }
@@ -386,13 +402,13 @@ fn evaluate_node(
     let mut own: [Option<Vec2>; 2] = [None; 2];
     for &f in inp.candidates.row(b) {
         acc.pairs += 1;
-        let facet = &inp.surface.facets[f as usize];
-        let (ia, ib) = (facet.nodes[0] as usize, facet.nodes[1] as usize);
         let frame = &inp.frames[f as usize];
-        let (xi, gap) = frame.project(s, inp.x[ia]);
-        if !(-XI_SLACK..=1.0 + XI_SLACK).contains(&xi) || gap >= 0.0 || gap < -facet.depth {
+        let (xi, gap) = frame.project(s, frame.a);
+        if !(-XI_SLACK..=1.0 + XI_SLACK).contains(&xi) || gap >= 0.0 || gap < -frame.depth {
             continue;
         }
+        let facet = &inp.surface.facets[f as usize];
+        let (ia, ib) = (facet.nodes[0] as usize, facet.nodes[1] as usize);
         // Past an end of the facet (the slack that lets a node slide over a
         // vertex), at a convex corner of the other body, the facet's line
         // runs outside that body: the depth is the lesser of the two
@@ -445,12 +461,12 @@ fn evaluate_node(
             // no contact: clear what is not clear already (most boundary
             // nodes touch nothing, step after step; rewriting their memory
             // and output cost a measurable share of the step in memory
-            // traffic)
+            // traffic). A contact (`out[k].facet` set) always leaves a
+            // memory, so an empty memory means an empty contact too, and the
+            // contact need not be read.
             None => {
                 if *states[k] != ContactState::default() {
                     *states[k] = ContactState::default();
-                }
-                if out[k].facet != NONE {
                     *out[k] = NodeContact { facet: NONE, ..Default::default() };
                 }
             }
