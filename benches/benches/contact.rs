@@ -58,6 +58,7 @@ fn contact(c: &mut Criterion) {
                 (vec![ContactState::default(); nb], vec![ContactState::default(); nb]);
             let (mut out, mut corner_out) = (vec![NodeContact::default(); nb], vec![NodeContact::default(); nb]);
             let mut partials = vec![ContactPartial::default(); nb.div_ceil(fdem_contact::CHUNK)];
+            let mut busy = vec![0; nb];
             let laws = [law];
             let mut frames = vec![FacetFrame::default(); surface.facets.len()];
             // one evaluation as the solver does it: the facets' frames, then
@@ -81,6 +82,7 @@ fn contact(c: &mut Criterion) {
                             corner_states: &mut corner_states,
                             out: &mut out,
                             corner_out: &mut corner_out,
+                            busy: &mut busy,
                         };
                         narrow::evaluate(&inp, c, &mut partials)
                     })

@@ -64,7 +64,10 @@ impl Surface {
         for (k, &([a, b], law)) in facets.iter().enumerate() {
             let (pa, pb) = (x_ref[a as usize], x_ref[b as usize]);
             let d = [pb[0] - pa[0], pb[1] - pa[1]];
-            let length = d[0].hypot(d[1]);
+            // a plain square root: `hypot` (careful about overflow, which
+            // reference lengths never approach) is several times slower,
+            // and surfaces are rebuilt at every crack insertion
+            let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
             let c = apex[k];
             let height = ((c[0] - pa[0]) * d[1] - (c[1] - pa[1]) * d[0]).abs() / length;
             surface_facets.push(SurfaceFacet { nodes: [a, b], law, length, depth: 0.5 * height, key: keys[k] });
@@ -105,7 +108,7 @@ impl Surface {
             let [a, b] = self.facets[k as usize].nodes;
             let (pa, pb) = (x_ref[a as usize], x_ref[b as usize]);
             let d = [pb[0] - pa[0], pb[1] - pa[1]];
-            let len = d[0].hypot(d[1]);
+            let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
             [d[1] / len, -d[0] / len]
         };
         self.faces = (0..self.nodes.len())

@@ -142,6 +142,7 @@ macro_rules! saved_state {
                 for o in c.out.iter_mut().chain(c.corner_out.iter_mut()) {
                     o.locate(&sim.surface);
                 }
+                c.mark_busy();
             }
             // per-chunk partial sums are sized, never resized, by the passes
             if let Some(c) = sim.contact.as_mut() {

@@ -31,6 +31,10 @@ pub(crate) struct ContactModel {
     /// Per boundary node: this step's second contact (corner nodes).
     #[serde(skip)]
     pub corner_out: Vec<NodeContact>,
+    /// Per boundary node: which memories are not empty (derived, see
+    /// `narrow::Contacts::busy`; set with [`ContactModel::mark_busy`]).
+    #[serde(skip)]
+    busy: Vec<u8>,
     /// The memory and contacts of the surface before the last topology
     /// change, kept as buffers for the next one (scratch).
     #[serde(skip)]
@@ -68,6 +72,14 @@ impl ContactModel {
         self.partials.resize(surface.nodes.len().div_ceil(fdem_contact::CHUNK), ContactPartial::default());
         self.frames.clear();
         self.frames.resize(surface.facets.len(), FacetFrame::default());
+    }
+
+    /// Derives the busy flags from the memories (after they were set other
+    /// than by an evaluation: a topology change, a restore).
+    pub fn mark_busy(&mut self) {
+        self.busy.clear();
+        self.busy.resize(self.states.len(), 0);
+        narrow::mark_busy(&self.states, &self.corner_states, &mut self.busy);
     }
 
     /// Checks and builds the contact model.
@@ -114,6 +126,7 @@ impl ContactModel {
             out: Vec::new(),
             corner_states: Vec::new(),
             corner_out: Vec::new(),
+            busy: Vec::new(),
             spare_states: Default::default(),
             spare_out: Default::default(),
             partials: Vec::new(),
@@ -256,6 +269,7 @@ impl ContactModel {
             spare.resize(nb, NodeContact { facet: NONE, ..Default::default() });
             std::mem::swap(out, spare);
         }
+        self.mark_busy();
         self.size_scratch(new);
         match old {
             Some(old) => self.broad.carry_over(old, new, x, margin),
@@ -296,9 +310,10 @@ impl ContactModel {
             corner_states: &mut self.corner_states,
             out: &mut self.out,
             corner_out: &mut self.corner_out,
+            busy: &mut self.busy,
         };
         narrow::evaluate(&inp, c, &mut self.partials);
-        narrow::assemble(surface, [&self.out, &self.corner_out], forces, damping);
+        narrow::assemble([&self.out, &self.corner_out], &self.busy, forces, damping);
         let mut sum = ContactPartial::default();
         for p in &self.partials {
             sum.pairs += p.pairs;
@@ -316,7 +331,9 @@ fn facet_normal(surface: &Surface, x: &[Vec2], f: u32) -> Vec2 {
     let [a, b] = surface.facets[f as usize].nodes;
     let (pa, pb) = (x[a as usize], x[b as usize]);
     let d = [pb[0] - pa[0], pb[1] - pa[1]];
-    let len = d[0].hypot(d[1]);
+    // a plain square root: `hypot`'s care for overflow cost a third of a
+    // topology change's contact carry-over
+    let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
     [d[1] / len, -d[0] / len]
 }
 
@@ -328,7 +345,7 @@ fn mean_normal(surface: &Surface, x: &[Vec2], b: usize) -> Vec2 {
         let m = facet_normal(surface, x, f);
         n = [n[0] + m[0], n[1] + m[1]];
     }
-    let len = n[0].hypot(n[1]);
+    let len = (n[0] * n[0] + n[1] * n[1]).sqrt();
     if len > 0.0 {
         [n[0] / len, n[1] / len]
     } else {
