@@ -66,7 +66,7 @@ fn contact(c: &mut Criterion) {
             narrow_g.bench_function(BenchmarkId::new(format!("pairs_{pairs}"), threads), |b| {
                 b.iter(|| {
                     pool.install(|| {
-                        narrow::facet_frames(&surface, &x, &mut frames);
+                        narrow::facet_frames(&surface, &x, &v, &mut frames);
                         let inp = NarrowInputs {
                             x: &x,
                             v: &v,

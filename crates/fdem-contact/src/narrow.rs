@@ -93,7 +93,7 @@ impl NodeContact {
     /// Sets [`NodeContact::ends`] from the surface (after a restore).
     pub fn locate(&mut self, surface: &Surface) {
         if self.facet != NONE {
-            self.ends = surface.facets[self.facet as usize].nodes.map(|n| surface.index_of[n as usize]);
+            self.ends = surface.facets[self.facet as usize].ends;
         }
     }
 }
@@ -136,21 +136,24 @@ pub struct FacetFrame {
     pub a: Vec2,
     /// Deepest penetration accepted behind the facet (m).
     pub depth: f64,
+    /// Velocities of the first and second node (m/s): a contact's relative
+    /// velocity reads them here, in the record it has already loaded.
+    pub v: [Vec2; 2],
 }
 
 impl Default for FacetFrame {
     fn default() -> Self {
-        Self { t: [0.0; 2], len: 0.0, a: [0.0; 2], depth: f64::INFINITY }
+        Self { t: [0.0; 2], len: 0.0, a: [0.0; 2], depth: f64::INFINITY, v: [[0.0; 2]; 2] }
     }
 }
 
 impl FacetFrame {
-    /// The frame of the facet `[a, b]` (no depth limit).
+    /// The frame of the facet `[a, b]` (no depth limit, at rest).
     #[inline(always)]
     pub fn of(a: Vec2, b: Vec2) -> Self {
         let d = [b[0] - a[0], b[1] - a[1]];
         let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
-        Self { t: [d[0] / len, d[1] / len], len, a, depth: f64::INFINITY }
+        Self { t: [d[0] / len, d[1] / len], len, a, ..Self::default() }
     }
 
     /// Outward normal (unit).
@@ -169,16 +172,17 @@ impl FacetFrame {
     }
 }
 
-/// Every facet's [`FacetFrame`] at positions `x` (parallel over fixed
-/// chunks), once per contact evaluation: the candidate tests, node normals
-/// and tributary lengths read them instead of recomputing a square root per
-/// use (each facet's frame was computed 5–6 times per step before).
-pub fn facet_frames(surface: &Surface, x: &[Vec2], frames: &mut [FacetFrame]) {
+/// Every facet's [`FacetFrame`] at positions `x` and velocities `v`
+/// (parallel over fixed chunks), once per contact evaluation: the candidate
+/// tests, node normals and tributary lengths read them instead of
+/// recomputing a square root per use (each facet's frame was computed 5–6
+/// times per step before).
+pub fn facet_frames(surface: &Surface, x: &[Vec2], v: &[Vec2], frames: &mut [FacetFrame]) {
     frames.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
         for (j, fr) in out.iter_mut().enumerate() {
             let facet = &surface.facets[c * CHUNK + j];
-            let [a, b] = facet.nodes;
-            *fr = FacetFrame { depth: facet.depth, ..FacetFrame::of(x[a as usize], x[b as usize]) };
+            let [a, b] = facet.nodes.map(|n| n as usize);
+            *fr = FacetFrame { depth: facet.depth, v: [v[a], v[b]], ..FacetFrame::of(x[a], x[b]) };
         }
     });
 }
@@ -369,9 +373,8 @@ fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate
     // how far the node moved towards the facet this step
     let approach = || {
         let w = c.xi.clamp(0.0, 1.0);
-        let v = inp.v;
-        ((v[node][0] - (1.0 - w) * v[c.ia][0] - w * v[c.ib][0]) * n[0]
-            + (v[node][1] - (1.0 - w) * v[c.ia][1] - w * v[c.ib][1]) * n[1])
+        let (v, [va, vb]) = (inp.v, inp.frames[c.f as usize].v);
+        ((v[node][0] - (1.0 - w) * va[0] - w * vb[0]) * n[0] + (v[node][1] - (1.0 - w) * va[1] - w * vb[1]) * n[1])
             .abs()
             * inp.dt
     };
@@ -520,8 +523,8 @@ fn respond(
     let law = &inp.laws[facet.law as usize];
     let (ia, ib) = (facet.nodes[0] as usize, facet.nodes[1] as usize);
     let (n, t) = (inp.frames[f as usize].normal(), inp.frames[f as usize].t);
-    let v = inp.v;
-    let vrel = [v[node][0] - (1.0 - xi) * v[ia][0] - xi * v[ib][0], v[node][1] - (1.0 - xi) * v[ia][1] - xi * v[ib][1]];
+    let (v, [va, vb]) = (inp.v, inp.frames[f as usize].v);
+    let vrel = [v[node][0] - (1.0 - xi) * va[0] - xi * vb[0], v[node][1] - (1.0 - xi) * va[1] - xi * vb[1]];
     let gap_rate = vrel[0] * n[0] + vrel[1] * n[1];
     // the node's springs: stiffness per unit area × its share of the
     // contact; at a corner the bearing face's half, and the dashpot sees
@@ -582,7 +585,7 @@ fn respond(
         normal_force,
         tangential_force: ft,
         slipping: work > 0.0,
-        ends: [inp.surface.index_of[ia], inp.surface.index_of[ib]],
+        ends: facet.ends,
     }
 }
 
@@ -662,7 +665,7 @@ mod tests {
         let v = vec![[0.0; 2]; x.len()];
         let mass = vec![1.0; x.len()];
         let mut frames = vec![FacetFrame::default(); surface.facets.len()];
-        facet_frames(surface, x, &mut frames);
+        facet_frames(surface, x, &v, &mut frames);
         let inp = NarrowInputs {
             x,
             v: &v,
@@ -801,7 +804,7 @@ mod tests {
         let v: Vec<Vec2> = (0..x.len()).map(|i| if i < 4 { [delta / dt, -delta / dt] } else { [0.0; 2] }).collect();
         let mass = vec![1.0; x.len()];
         let mut frames = vec![FacetFrame::default(); surface.facets.len()];
-        facet_frames(&surface, &x, &mut frames);
+        facet_frames(&surface, &x, &v, &mut frames);
         let laws = [InterfaceLaw::new(k, k, 0.0, 0.0, 0.0).unwrap()];
         let inp = NarrowInputs {
             x: &x,

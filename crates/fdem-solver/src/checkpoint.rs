@@ -137,7 +137,7 @@ macro_rules! saved_state {
                 pool,
             };
             // derived data, not saved
-            sim.surface.find_faces(&sim.nodes.x0);
+            sim.surface.derive(&sim.nodes.x0);
             if let Some(c) = sim.contact.as_mut() {
                 for o in c.out.iter_mut().chain(c.corner_out.iter_mut()) {
                     o.locate(&sim.surface);

@@ -294,7 +294,7 @@ impl ContactModel {
         forces: &mut [Vec2],
         damping: &mut [Vec2],
     ) -> ContactPartial {
-        narrow::facet_frames(surface, x, &mut self.frames);
+        narrow::facet_frames(surface, x, v, &mut self.frames);
         let inp = NarrowInputs {
             x,
             v,
