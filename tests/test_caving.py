@@ -246,6 +246,7 @@ def test_quick_caving_writes_its_results(quick_caving):
         assert (out / name).stat().st_size > 10_000, name
     assert any(f.startswith("fig4_") for f in summary["figures"])
     assert any(f.startswith("fig5_") for f in summary["figures"])
+    assert len(set(summary["figures"])) == len(summary["figures"]), summary["figures"]
     with open(out / "probes.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert {r["node"] for r in rows} == {str(float(n)) for n, _, _ in PAPER_PROBES}
@@ -256,6 +257,15 @@ def test_quick_caving_writes_its_results(quick_caving):
         frags = list(csv.DictReader(f))
     assert len(frags) == summary["fragments"]
     assert "energy_residual_J" in (out / "summary.txt").read_text()
+
+
+def test_figure_times_are_each_drawn_once():
+    """A run to 1.3 s at the paper's schedule: the third stage (0.05 + 3 ×
+    0.2 s) and half the run (0.65 s) are one picture, not two (the floats
+    differ in the last bit)."""
+    times = CavingCase(until=1.3).figure_times()
+    assert times == [0.0, 0.65, 1.3]
+    assert CavingCase().figure_times() == [0.0, 0.65, 1.75, 3.5]
 
 
 def test_strip_means_integrate_over_the_strips_exactly():

@@ -117,6 +117,14 @@ class CavingCase:
         (about 30 s on 2 cores, 4 872 elements at the start)."""
         return CavingCase(size=4.0, joint_scale=4.0, support=5.0, until=0.8, interval=0.06, output_every=0.2)
 
+    def figure_times(self) -> list[float]:
+        """The times (s) of the Fig. 4-like pictures: the start, the third
+        undercut stage, half the run and its end, each once (rounded to the
+        microsecond: ``0.05 + 3 × 0.2`` and ``1.3 / 2`` are the same
+        picture)."""
+        times = (0.0, self.start + self.interval * 3, self.until / 2, self.until)
+        return sorted({round(t, 6) for t in times})
+
 
 def caving_model(case: CavingCase | None = None) -> Model:
     """The paper's block-caving model (DESIGN §5) for ``case`` (default: the
@@ -324,7 +332,7 @@ def run_caving(
         # this fraction of the intact model's: the masses that would are
         # raised instead
         sim.configure(mass_scaling=case.mass_scaling * sim.time_step)
-    figure_times = sorted({0.0, case.start + case.interval * 3, case.until / 2, case.until})
+    figure_times = case.figure_times()
     points = np.array([[x, y] for _, x, y in PAPER_PROBES])
     probe_rows: list[list[float]] = []
     sample = min(0.05, case.output_every)
