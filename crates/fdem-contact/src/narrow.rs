@@ -320,9 +320,9 @@ pub fn mark_busy(states: &[ContactState], corner_states: &[ContactState], busy: 
 /// Updates the states, fills the contacts and one partial per chunk.
 pub fn evaluate(inp: &NarrowInputs<'_>, c: Contacts<'_>, partials: &mut [ContactPartial]) {
     // the chunks are zipped: a short array would silently drop nodes
-    debug_assert!(
-        [c.corner_states.len(), c.out.len(), c.corner_out.len(), c.busy.len()].iter().all(|&l| l == c.states.len())
-    );
+    debug_assert!([c.corner_states.len(), c.out.len(), c.corner_out.len(), c.busy.len()]
+        .iter()
+        .all(|&l| l == c.states.len()));
     c.states
         .par_chunks_mut(CHUNK)
         .zip(c.corner_states.par_chunks_mut(CHUNK))
