@@ -123,9 +123,11 @@ pub fn project(s: Vec2, a: Vec2, b: Vec2) -> (f64, f64, Vec2, Vec2, f64) {
 /// second), length (m), the position of its first node and its depth limit
 /// (m, [`SurfaceFacet::depth`](crate::SurfaceFacet::depth)). Its outward
 /// normal is `n = (t_y, −t_x)`. One record holds everything the candidate
-/// test reads, so that testing a candidate touches one cache line (the
-/// test is latency-bound: reading the facet, its frame and its first
-/// node's position from three arrays cost three cache misses).
+/// test reads (its first 48 bytes) and the facet nodes' velocities a
+/// contact needs, so that testing a candidate is one random read instead
+/// of three (the facet, its frame, its first node's position): the test is
+/// latency-bound in a fractured mesh, whose new nodes and elements lie far
+/// from their neighbours in memory.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FacetFrame {
     /// Unit tangent.
@@ -299,8 +301,8 @@ pub struct Contacts<'a> {
     /// 1 when the second is not ([`mark_busy`]; kept up to date by
     /// [`evaluate`]). A node with no memory and no candidate is skipped
     /// without reading its memory or contacts, and the assembly visits only
-    /// the busy nodes: most boundary nodes touch nothing, and reading their
-    /// records cost a tenth of the step in memory traffic.
+    /// the busy nodes: reading every node's 80-byte contact record to find
+    /// most of them empty was most of the (serial) assembly's time.
     pub busy: &'a mut [u8],
 }
 
