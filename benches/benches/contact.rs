@@ -56,7 +56,9 @@ fn contact(c: &mut Criterion) {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             let (mut states, mut corner_states) =
                 (vec![ContactState::default(); nb], vec![ContactState::default(); nb]);
-            let (mut out, mut corner_out) = (vec![NodeContact::default(); nb], vec![NodeContact::default(); nb]);
+            // empty contacts, as the solver starts them (`facet: NONE`)
+            let empty = NodeContact { facet: fdem_contact::NONE, ..Default::default() };
+            let (mut out, mut corner_out) = (vec![empty; nb], vec![empty; nb]);
             let mut partials = vec![ContactPartial::default(); nb.div_ceil(fdem_contact::CHUNK)];
             let mut busy = vec![0; nb];
             let laws = [law];

@@ -482,7 +482,7 @@ fn evaluate_node(
     }
     // a smooth node's second contact stays empty from the topology change
     // that made it smooth (`adopt` starts every memory empty): not touched
-    debug_assert!(slots == 2 || (states[1].facet == NONE && out[1].facet == NONE));
+    debug_assert!(slots == 2 || (*states[1] == ContactState::default() && out[1].facet == NONE));
     let mut busy = 0;
     for k in 0..slots {
         let face = (slots == 2).then(|| faces[k]);
@@ -718,6 +718,56 @@ mod tests {
             assert!(list.iter().zip(&busy).all(|(c, f)| c.facet == NONE || f & (1 << k) != 0));
         }
         ([out, corner_out], partials)
+    }
+
+    /// The assembly over busy nodes adds the same forces in the same order
+    /// as a walk over every node's contacts (all first contacts in node
+    /// order, then the corner contacts): bit for bit, including a node busy
+    /// with its corner contact only and nodes whose memory outlived their
+    /// contact.
+    #[test]
+    fn assembly_of_busy_nodes_matches_a_walk_over_every_contact() {
+        let nb = 6;
+        let empty = NodeContact { facet: NONE, ..Default::default() };
+        let contact = |facet: u32, xi: f64, ends: [u32; 2], f: f64| NodeContact {
+            facet,
+            xi,
+            force: [f, 0.3 * f],
+            damping_force: [0.1 * f, -0.2 * f],
+            ends,
+            ..empty
+        };
+        let mut first = vec![empty; nb];
+        let mut corner = vec![empty; nb];
+        first[0] = contact(4, 0.3, [2, 3], 1.7);
+        first[3] = contact(1, 0.9, [0, 2], -2.1e6);
+        first[5] = contact(2, 0.1, [3, 0], 3.3e-3);
+        corner[1] = contact(0, 0.5, [3, 5], 7.0); // busy with its corner only
+        corner[3] = contact(5, 0.25, [0, 1], 1.1e5);
+        let mut busy: Vec<u8> = first
+            .iter()
+            .zip(&corner)
+            .map(|(c, k)| u8::from(c.facet != NONE) | u8::from(k.facet != NONE) << 1)
+            .collect();
+        busy[4] = 1; // a memory without a contact this step
+        let (mut forces, mut damping) = (vec![[9.0; 2]; nb], vec![[9.0; 2]; nb]);
+        assemble([&first, &corner], &busy, &mut forces, &mut damping);
+        let (mut want_f, mut want_d) = (vec![[0.0; 2]; nb], vec![[0.0; 2]; nb]);
+        for (b, c) in first.iter().enumerate().chain(corner.iter().enumerate()) {
+            if c.facet == NONE {
+                continue;
+            }
+            let [fa, fb] = c.ends.map(|i| i as usize);
+            for (out, f) in [(&mut want_f, c.force), (&mut want_d, c.damping_force)] {
+                for d in 0..2 {
+                    out[b][d] += f[d];
+                    out[fa][d] -= (1.0 - c.xi) * f[d];
+                    out[fb][d] -= c.xi * f[d];
+                }
+            }
+        }
+        assert_eq!(forces, want_f);
+        assert_eq!(damping, want_d);
     }
 
     /// A node that has just left a facet next to a convex corner of the
