@@ -43,7 +43,7 @@ pub struct Surface {
     pub node_facets: Csr,
     /// For every boundary node at a corner of its body (its two facets'
     /// normals more than 30° apart in the reference configuration, see
-    /// [`Surface::find_faces`]) the facet ending at it and the facet starting
+    /// [`Surface::derive`]) the facet ending at it and the facet starting
     /// from it: each face bears on the other bodies by itself (two contacts
     /// per corner node). `[NONE, NONE]` for a node on a smooth stretch of
     /// surface (one contact, along the node's mean normal) or on more than
@@ -126,14 +126,8 @@ impl Surface {
     /// cos 30°`) is a corner. The test is on the reference configuration,
     /// so a node's kind changes only with the topology (its angle changes
     /// only with strain).
-    pub fn find_faces(&mut self, x_ref: &[Vec2]) {
-        let normal = |k: u32| {
-            let [a, b] = self.facets[k as usize].nodes;
-            let (pa, pb) = (x_ref[a as usize], x_ref[b as usize]);
-            let d = [pb[0] - pa[0], pb[1] - pa[1]];
-            let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
-            [d[1] / len, -d[0] / len]
-        };
+    fn find_faces(&mut self, x_ref: &[Vec2]) {
+        let normal = |k: u32| self.facet_normal(x_ref, k);
         self.faces = (0..self.nodes.len())
             .map(|b| {
                 let node = self.nodes[b];
@@ -154,6 +148,36 @@ impl Surface {
                 }
             })
             .collect();
+    }
+
+    /// Outward normal (unit) of facet `f` at positions `x`: `(dy, −dx)/L`.
+    /// (A plain square root: `hypot`'s care for overflow, which lengths of
+    /// metres never approach, is several times slower, and topology
+    /// changes compute this for every boundary node.)
+    pub fn facet_normal(&self, x: &[Vec2], f: u32) -> Vec2 {
+        let [a, b] = self.facets[f as usize].nodes;
+        let (pa, pb) = (x[a as usize], x[b as usize]);
+        let d = [pb[0] - pa[0], pb[1] - pa[1]];
+        let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+        [d[1] / len, -d[0] / len]
+    }
+
+    /// Mean outward normal (unit) of boundary node `b` at positions `x`:
+    /// the normalised sum of its facets' normals (zero where they cancel).
+    /// The same numbers as the narrow phase's node normal from the facet
+    /// frames at `x`.
+    pub fn mean_normal(&self, x: &[Vec2], b: usize) -> Vec2 {
+        let mut n = [0.0; 2];
+        for &f in self.node_facets.row(b) {
+            let m = self.facet_normal(x, f);
+            n = [n[0] + m[0], n[1] + m[1]];
+        }
+        let len = (n[0] * n[0] + n[1] * n[1]).sqrt();
+        if len > 0.0 {
+            [n[0] / len, n[1] / len]
+        } else {
+            n
+        }
     }
 
     /// Largest tributary length (m) boundary node `b` can have: half of each

@@ -208,8 +208,8 @@ impl ContactModel {
             };
             // the outward normal at `x` of an old contact's bearing face
             let old_normal = |&(_, _, ob, face): &(ContactState, f64, usize, u32)| match face {
-                NONE => mean_normal(old, x, ob),
-                f => facet_normal(old, x, f),
+                NONE => old.mean_normal(x, ob),
+                f => old.facet_normal(x, f),
             };
             let resumed = |s: ContactState, depth: f64| -> ContactState {
                 let [a, b] = old.facets[s.facet as usize].nodes;
@@ -242,7 +242,7 @@ impl ContactModel {
                         |o: &Old| o.is_some_and(|(_, _, _, face)| face != NONE && old.facets[face as usize].key == key);
                     let pick = from.iter().find(|o| same_face(o)).copied().flatten().or_else(|| {
                         // the old contact whose face points most nearly the same way
-                        let n = if single { mean_normal(new, x, b) } else { facet_normal(new, x, faces[k]) };
+                        let n = if single { new.mean_normal(x, b) } else { new.facet_normal(x, faces[k]) };
                         let dot = |o: &(ContactState, f64, usize, u32)| {
                             let m = old_normal(o);
                             m[0] * n[0] + m[1] * n[1]
@@ -323,32 +323,5 @@ impl ContactModel {
         }
         self.pairs_evaluated += sum.pairs;
         sum
-    }
-}
-
-/// Outward normal (unit) of facet `f` of `surface` at positions `x`.
-fn facet_normal(surface: &Surface, x: &[Vec2], f: u32) -> Vec2 {
-    let [a, b] = surface.facets[f as usize].nodes;
-    let (pa, pb) = (x[a as usize], x[b as usize]);
-    let d = [pb[0] - pa[0], pb[1] - pa[1]];
-    // a plain square root: `hypot`'s care for overflow cost a third of a
-    // topology change's contact carry-over
-    let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
-    [d[1] / len, -d[0] / len]
-}
-
-/// Mean outward normal (unit) of boundary node `b` of `surface` at `x`:
-/// the normalised sum of its facets' normals.
-fn mean_normal(surface: &Surface, x: &[Vec2], b: usize) -> Vec2 {
-    let mut n = [0.0; 2];
-    for &f in surface.node_facets.row(b) {
-        let m = facet_normal(surface, x, f);
-        n = [n[0] + m[0], n[1] + m[1]];
-    }
-    let len = (n[0] * n[0] + n[1] * n[1]).sqrt();
-    if len > 0.0 {
-        [n[0] / len, n[1] / len]
-    } else {
-        n
     }
 }

@@ -2,9 +2,9 @@
 //! `setup.rs`, read-out of results in `readout.rs`.
 
 use std::sync::Arc;
+use std::time::Instant;
 
 use rayon::prelude::*;
-use std::time::Instant;
 
 use fdem_contact::Surface;
 use fdem_element::{ReferenceShape, Vec2};

@@ -74,7 +74,7 @@ pub(crate) fn build_surface(
                 };
                 list.push((nodes, law));
                 apex.push(x_ref[t[(k + 2) % 3] as usize]);
-                keys.push((3 * e + k) as u32);
+                keys.push(key);
             }
         }
     }
