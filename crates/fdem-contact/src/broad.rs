@@ -83,6 +83,13 @@ impl BroadPhase {
         self.changed = true;
     }
 
+    /// Forgets the tree and the lists: the next update builds both from
+    /// scratch (after the facets were relabelled, when the old tree's
+    /// layout no longer follows the facets' order).
+    pub fn reset(&mut self) {
+        self.fresh = true;
+    }
+
     /// Whether some boundary node has moved more than half the margin since
     /// the last build.
     pub fn needs_update(&self, surface: &Surface, x: &[Vec2]) -> bool {

@@ -243,17 +243,37 @@ fn corner_gap(surface: &Surface, x: &[Vec2], frames: &[FacetFrame], f: u32, at_e
     let [a, b] = surface.facets[f as usize].nodes;
     let v = if at_end { b } else { a };
     let bv = surface.index_of[v as usize];
-    let k = surface.node_facets.row(bv as usize).iter().copied().find(|&k| {
-        let [p, q] = surface.facets[k as usize].nodes;
-        k != f && if at_end { p == v } else { q == v }
-    })?;
-    let p = surface.facets[k as usize].nodes[0];
-    let (d, e) = (frames[f as usize].t, frames[k as usize].t);
+    let d = frames[f as usize].t;
     // the turn from the first facet along the surface to the second: from
     // `f` to the next one past its end, from the previous one to `f` before
-    // its start
-    let cross = d[0] * e[1] - d[1] * e[0];
-    let turn = if at_end { cross } else { -cross };
+    // its start (sine and cosine)
+    let turn = |k: u32| {
+        let e = frames[k as usize].t;
+        let cross = d[0] * e[1] - d[1] * e[0];
+        (if at_end { cross } else { -cross }, d[0] * e[0] + d[1] * e[1])
+    };
+    // At a node where the body touches itself (four facets) two facets
+    // qualify; the one on the same wedge of the body turns most to the left
+    // (walking with the body on the left, the boundary of one wedge turns
+    // left of the other's). Chosen by geometry, not by index, so that it
+    // does not depend on the numbering.
+    let mut next = surface.node_facets.row(bv as usize).iter().copied().filter(|&k| {
+        let [p, q] = surface.facets[k as usize].nodes;
+        k != f && if at_end { p == v } else { q == v }
+    });
+    let mut k = next.next()?;
+    for other in next {
+        let angle = |k: u32| {
+            let (sin, cos) = turn(k);
+            sin.atan2(cos)
+        };
+        if angle(other) > angle(k) {
+            k = other;
+        }
+    }
+    let p = surface.facets[k as usize].nodes[0];
+    let e = frames[k as usize].t;
+    let turn = turn(k).0;
     let smooth = d[0] * e[0] + d[1] * e[1] >= SMOOTH_COS;
     (turn > 0.0 && smooth).then(|| frames[k as usize].project(s, x[p as usize]).1)
 }
@@ -426,8 +446,9 @@ fn evaluate_node(
     let s = inp.x[node];
     let faces = inp.surface.faces[b];
     let slots = if faces[0] == NONE { 1 } else { 2 };
-    // per contact: (rank, facet, ξ, gap) of the best candidate so far
-    let mut best: [Option<(u8, u32, f64, f64)>; 2] = [None; 2];
+    // per contact: (rank, facet, ξ, gap, facing) of the best candidate so far
+    type Best = Option<(u8, u32, f64, f64, f64)>;
+    let mut best: [Best; 2] = [None; 2];
     let mut own: [Option<Vec2>; 2] = [None; 2];
     for &f in inp.candidates.row(b) {
         acc.pairs += 1;
@@ -475,8 +496,12 @@ fn evaluate_node(
                 continue;
             }
             let Some(r) = rank(inp, node, &*states[k], &c) else { continue };
-            if best[k].is_none_or(|(rb, _, _, g)| r < rb || (r == rb && gap > g)) {
-                best[k] = Some((r, f, xi, gap));
+            // equal ranks: the shallower penetration; an exact tie (a node
+            // at the vertex two facets share) goes to the facet that faces
+            // the node's face more squarely, so the choice is geometric,
+            // not by facet index, and does not depend on the numbering
+            if best[k].is_none_or(|(rb, _, _, g, fb)| r < rb || (r == rb && (gap > g || (gap == g && facing < fb)))) {
+                best[k] = Some((r, f, xi, gap, facing));
             }
         }
     }
@@ -487,7 +512,8 @@ fn evaluate_node(
     for k in 0..slots {
         let face = (slots == 2).then(|| faces[k]);
         match best[k] {
-            Some(best) => {
+            Some((r, f, xi, gap, _)) => {
+                let best = (r, f, xi, gap);
                 *out[k] = respond(inp, b, node, &mut *states[k], best, face, acc);
                 busy |= 1 << k;
             }

@@ -84,6 +84,12 @@ impl Surface {
                 ends: [NONE; 2],
             });
         }
+        Self::indexed(n_nodes, surface_facets, x_ref)
+    }
+
+    /// The surface of `facets` (ascending keys) on a mesh of `n_nodes`
+    /// nodes: its boundary nodes, their facets and the derived data.
+    fn indexed(n_nodes: usize, surface_facets: Vec<SurfaceFacet>, x_ref: &[Vec2]) -> Self {
         let mut on = vec![false; n_nodes];
         for f in &surface_facets {
             on[f.nodes[0] as usize] = true;
@@ -107,6 +113,38 @@ impl Surface {
         let mut surface = Self { facets: surface_facets, nodes, index_of, node_facets, faces: Vec::new() };
         surface.derive(x_ref);
         surface
+    }
+
+    /// The same surface under new node and element numbers (the solver's
+    /// spatial renumbering, docs/renumbering.md): node `i` becomes
+    /// `node_map[i]`, a facet keyed `k` is keyed `new_key(k)` (the solver
+    /// maps `3 e + k` to `3 e' + k`), laws, lengths and depths are kept, and
+    /// facets are put in ascending new keys, so that the result is what a
+    /// fresh build on the renumbered mesh gives. `x_ref` are the reference
+    /// positions in the new numbering. Also returns, per old facet, its new
+    /// index, and per old boundary node, its new boundary index.
+    pub fn relabel(
+        &self,
+        node_map: &[u32],
+        new_key: impl Fn(u32) -> u32,
+        x_ref: &[Vec2],
+    ) -> (Self, Vec<u32>, Vec<u32>) {
+        let mut order: Vec<(u32, u32)> =
+            self.facets.iter().enumerate().map(|(k, f)| (new_key(f.key), k as u32)).collect();
+        order.sort_unstable();
+        let mut facet_map = vec![NONE; self.facets.len()];
+        let facets = order
+            .iter()
+            .enumerate()
+            .map(|(k, &(key, old))| {
+                facet_map[old as usize] = k as u32;
+                let f = &self.facets[old as usize];
+                SurfaceFacet { nodes: f.nodes.map(|n| node_map[n as usize]), key, ends: [NONE; 2], ..*f }
+            })
+            .collect();
+        let surface = Self::indexed(node_map.len(), facets, x_ref);
+        let node_map_b = self.nodes.iter().map(|&n| surface.index_of[node_map[n as usize] as usize]).collect();
+        (surface, facet_map, node_map_b)
     }
 
     /// Sets the derived data that is not saved ([`SurfaceFacet::ends`],
@@ -208,5 +246,59 @@ mod tests {
         assert_eq!(s.tributary_max(0), 1.0);
         assert!(s.adjacent(0, 1) && !s.adjacent(0, 2));
         assert!((s.facets[0].depth - 0.5).abs() < 1e-15);
+    }
+
+    /// The surface of separate triangles (every edge free), keyed `3 e + k`
+    /// like the solver's, with edge 1 of each triangle on law 1.
+    fn triangles_surface(x: &[Vec2], tris: &[[u32; 3]]) -> Surface {
+        let mut list = Vec::new();
+        let (mut apex, mut keys) = (Vec::new(), Vec::new());
+        for (e, t) in tris.iter().enumerate() {
+            for k in 0..3 {
+                list.push(([t[k], t[(k + 1) % 3]], u16::from(k == 1)));
+                apex.push(x[t[(k + 2) % 3] as usize]);
+                keys.push((3 * e + k) as u32);
+            }
+        }
+        Surface::with_keys(x.len(), &list, x, &apex, &keys)
+    }
+
+    #[test]
+    fn relabelled_surface_is_the_surface_of_the_relabelled_mesh() {
+        let x = [
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [0.0, 1.0],
+            [3.0, 0.0],
+            [4.0, 0.0],
+            [3.0, 2.0],
+            [0.0, 5.0],
+            [1.0, 4.0],
+            [1.0, 6.0],
+        ];
+        let tris = [[0, 1, 2], [3, 4, 5], [6, 7, 8]];
+        let old = triangles_surface(&x, &tris);
+        // new node i is old node_order[i]; new element j is old elem_order[j]
+        let node_order = [5u32, 8, 0, 3, 7, 1, 4, 2, 6];
+        let elem_order = [2u32, 0, 1];
+        let inv = |order: &[u32]| {
+            let mut map = vec![0u32; order.len()];
+            order.iter().enumerate().for_each(|(new, &o)| map[o as usize] = new as u32);
+            map
+        };
+        let (node_map, elem_map) = (inv(&node_order), inv(&elem_order));
+        let x_new: Vec<Vec2> = node_order.iter().map(|&o| x[o as usize]).collect();
+        let tris_new: Vec<[u32; 3]> =
+            elem_order.iter().map(|&o| tris[o as usize].map(|v| node_map[v as usize])).collect();
+        let (relabelled, facet_map, b_map) = old.relabel(&node_map, |k| 3 * elem_map[(k / 3) as usize] + k % 3, &x_new);
+        assert_eq!(relabelled, triangles_surface(&x_new, &tris_new));
+        for (f, facet) in old.facets.iter().enumerate() {
+            let moved = &relabelled.facets[facet_map[f] as usize];
+            assert_eq!(moved.nodes, facet.nodes.map(|v| node_map[v as usize]));
+            assert_eq!(moved.law, facet.law);
+        }
+        for (b, &node) in old.nodes.iter().enumerate() {
+            assert_eq!(relabelled.nodes[b_map[b] as usize], node_map[node as usize]);
+        }
     }
 }

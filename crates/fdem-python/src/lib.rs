@@ -187,7 +187,7 @@ impl PySimulation {
         contact_laws=None, contact_facets=None, contact_facet_laws=None, crack_law=0, contact_margin=None,
         fracture_interval=0, fracture_edge_tolerance=15.0, fracture_crack_tolerance=30.0, fracture_min_quality=0.2, fracture_min_altitude=0.0, fracture_insert_at=0.02,
         stage_times=Vec::new(), stage_elements=Vec::new(),
-        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.1, mass_scaling=None, threads=0
+        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.1, mass_scaling=None, renumber=None, threads=0
     ))]
     fn new(
         points: PyReadonlyArray2<'_, f64>,
@@ -226,6 +226,7 @@ impl PySimulation {
         dt_interval: u32,
         energy_growth: f64,
         mass_scaling: Option<f64>,
+        renumber: Option<f64>,
         threads: usize,
     ) -> PyResult<Self> {
         guard(|| {
@@ -369,6 +370,7 @@ impl PySimulation {
                     dt_interval,
                     energy_growth,
                     mass_scaling,
+                    renumber,
                 },
             };
             let sim = fdem_solver::Simulation::new(spec, threads).map_err(|e| value_error(e.to_string()))?;
@@ -475,7 +477,7 @@ impl PySimulation {
     }
 
     /// Replaces the run settings between stages.
-    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth=0.1, mass_scaling=None))]
+    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth=0.1, mass_scaling=None, renumber=None))]
     #[allow(clippy::too_many_arguments)]
     fn set_settings(
         &mut self,
@@ -486,6 +488,7 @@ impl PySimulation {
         dt_interval: u32,
         energy_growth: f64,
         mass_scaling: Option<f64>,
+        renumber: Option<f64>,
     ) -> PyResult<()> {
         guard(|| {
             self.ok()?;
@@ -497,8 +500,25 @@ impl PySimulation {
                 dt_interval,
                 energy_growth,
                 mass_scaling,
+                renumber,
             };
             self.sim.set_settings(s).map_err(|e| value_error(e.to_string()))
+        })
+    }
+
+    /// Spatial renumberings so far.
+    #[getter]
+    fn renumberings(&self) -> u64 {
+        self.sim.renumberings()
+    }
+
+    /// Renumbers nodes and elements along a Hilbert curve now (ids do not
+    /// change).
+    fn renumber(&mut self) -> PyResult<()> {
+        guard(|| {
+            self.ok()?;
+            self.sim.renumber_now();
+            Ok(())
         })
     }
 
@@ -610,12 +630,12 @@ impl PySimulation {
 
     /// Current node coordinates, shape (n_nodes, 2), a copy (m).
     fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        vec2_array(py, self.sim.positions())
+        vec2_array(py, &self.sim.positions())
     }
 
     /// Reference node coordinates, shape (n_nodes, 2), a copy (m).
     fn reference_positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        vec2_array(py, self.sim.reference_positions())
+        vec2_array(py, &self.sim.reference_positions())
     }
 
     /// Whole-step velocities, shape (n_nodes, 2), a copy (m/s).

@@ -40,6 +40,7 @@ use crate::fracture::FractureModel;
 use crate::loads::{Amplitude, Constraint, PressureLoad};
 use crate::model::{ExcavationStage, Settings};
 use crate::passes::{Material, PressureFacet};
+use crate::renumber::Layout;
 use crate::simulation::{ContactStats, Elements, Nodes, PhaseTimes, Simulation};
 use crate::CHUNK;
 use fdem_contact::{ContactState, NodeContact, Surface};
@@ -50,8 +51,9 @@ use fdem_mesh::Csr;
 pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
 /// The checkpoint format this build writes; it reads this one and older.
 /// Format 2 appends [`Format2`] (mass scaling) to the format-1 state,
-/// format 3 then [`Format3`] (the second contacts of corner nodes).
-pub const FORMAT_VERSION: u32 = 3;
+/// format 3 then [`Format3`] (the second contacts of corner nodes),
+/// format 4 then [`Format4`] (spatial renumbering).
+pub const FORMAT_VERSION: u32 = 4;
 const HEADER: usize = 40;
 
 /// Why a checkpoint could not be written or read.
@@ -134,6 +136,7 @@ macro_rules! saved_state {
                 phase_times: PhaseTimes::default(),
                 node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],
                 elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
+                layout: Layout::default(),
                 pool,
             };
             // derived data, not saved
@@ -246,6 +249,26 @@ impl Format3 {
     }
 }
 
+/// What format 4 added, written after [`Format3`]: the renumbering
+/// setting and the layout (internal index ↔ id) it has made. A file of an
+/// older format restores in creation order, with renumbering off.
+#[derive(Serialize, Deserialize)]
+struct Format4 {
+    renumber: Option<f64>,
+    layout: Layout,
+}
+
+impl Format4 {
+    fn of(s: &Simulation) -> Self {
+        Format4 { renumber: s.settings.renumber, layout: s.layout.clone() }
+    }
+
+    /// Creation order, no renumbering: what an older file restores with.
+    fn none(o: &StateOwned) -> Self {
+        Format4 { renumber: None, layout: Layout::new(o.elems.conn.len()) }
+    }
+}
+
 fn le_u32(b: &[u8]) -> u32 {
     u32::from_le_bytes([b[0], b[1], b[2], b[3]])
 }
@@ -265,6 +288,7 @@ impl Simulation {
         let mut state = postcard::to_stdvec(&state_ref(self)).expect("simulation state is serialisable");
         state.extend(postcard::to_stdvec(&Format2::of(self)).expect("format-2 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format3::of(self)).expect("format-3 data is serialisable"));
+        state.extend(postcard::to_stdvec(&Format4::of(self)).expect("format-4 data is serialisable"));
         let mut out = Vec::with_capacity(HEADER + state.len() + user.len());
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -329,16 +353,32 @@ impl Simulation {
         } else {
             (Format3::none(&owned), rest)
         };
+        let (renumbering, rest) = if version >= 4 {
+            postcard::take_from_bytes::<Format4>(rest).map_err(decode)?
+        } else {
+            (Format4::none(&owned), rest)
+        };
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
         }
         corners.apply(&mut owned);
         check_consistent(&owned)?;
+        if !renumbering.layout.is_consistent(owned.nodes.x.len(), owned.elems.conn.len()) {
+            return Err(CheckpointError::Invalid("the node and element numbering is not a permutation".into()));
+        }
+        if let Some(f) = renumbering.renumber {
+            if !(f > 0.0 && f.is_finite()) {
+                return Err(CheckpointError::Invalid(format!("renumbering fraction {f} must be positive")));
+            }
+        }
+        owned.settings.renumber = renumbering.renumber;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .map_err(|e| CheckpointError::Io(format!("cannot start {threads} threads: {e}")))?;
-        Ok((assemble(owned, Arc::new(pool)), user.to_vec()))
+        let mut sim = assemble(owned, Arc::new(pool));
+        sim.layout = renumbering.layout;
+        Ok((sim, user.to_vec()))
     }
 
     /// Writes a checkpoint to `path` atomically: to `path` + `.tmp`, flushed

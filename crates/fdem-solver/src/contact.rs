@@ -82,6 +82,34 @@ impl ContactModel {
         narrow::mark_busy(&self.states, &self.corner_states, &mut self.busy);
     }
 
+    /// Follows a relabelling of the surface ([`Surface::relabel`]):
+    /// `surface` is the relabelled one, `facet_map` and `b_map` give each
+    /// old facet's and boundary node's new index. Memories and this step's
+    /// contacts move with their nodes and point at the same facets; the
+    /// broad phase is rebuilt at its next update.
+    pub fn relabel(&mut self, surface: &Surface, facet_map: &[u32], b_map: &[u32]) {
+        let facet = |f: u32| if f == NONE { NONE } else { facet_map[f as usize] };
+        for states in [&mut self.states, &mut self.corner_states] {
+            let mut new = vec![ContactState::default(); states.len()];
+            for (old, s) in states.iter().enumerate() {
+                new[b_map[old] as usize] = ContactState { facet: facet(s.facet), ..*s };
+            }
+            *states = new;
+        }
+        for out in [&mut self.out, &mut self.corner_out] {
+            let mut new = vec![NodeContact { facet: NONE, ..Default::default() }; out.len()];
+            for (old, c) in out.iter().enumerate() {
+                let mut c = NodeContact { facet: facet(c.facet), ..*c };
+                c.locate(surface);
+                new[b_map[old] as usize] = c;
+            }
+            *out = new;
+        }
+        self.mark_busy();
+        self.size_scratch(surface);
+        self.broad.reset();
+    }
+
     /// Checks and builds the contact model.
     pub fn new(spec: &ContactSpec, n_nodes: usize) -> Result<Self, SetupError> {
         if spec.laws.is_empty() {

@@ -22,7 +22,11 @@ impl Simulation {
             return Err(SetupError::Invalid(format!("element {e} does not exist (the model has {m})")));
         }
         let remove: Vec<usize> = {
-            let mut r: Vec<usize> = elements.iter().map(|&e| e as usize).filter(|&e| self.elems.active[e]).collect();
+            let mut r: Vec<usize> = elements
+                .iter()
+                .map(|&e| self.layout.elem_index(e) as usize)
+                .filter(|&e| self.elems.active[e])
+                .collect();
             r.sort_unstable();
             r.dedup();
             r
@@ -38,7 +42,7 @@ impl Simulation {
         // energy of the mass that left, dropped bonds and contacts. The
         // nodes that stay keep their whole-step velocities.
         let before = self.energies();
-        let v_n = self.velocities();
+        let v_n = self.velocities_by_index();
         for &e in &remove {
             self.elems.active[e] = false;
         }
@@ -128,11 +132,37 @@ impl Simulation {
         }
     }
 
-    /// For every element the fragment (body) it belongs to: active elements
-    /// that share a node are in the same fragment; fragments are numbered
-    /// 0, 1, … in order of their smallest element id; removed elements get
-    /// `u32::MAX`. Linear in the element count.
+    /// For every element (by id) the fragment (body) it belongs to: active
+    /// elements that share a node are in the same fragment; fragments are
+    /// numbered 0, 1, … in order of their smallest element id; removed
+    /// elements get `u32::MAX`. Linear in the element count.
     pub fn fragment_labels(&self) -> Vec<u32> {
+        let labels = self.fragment_labels_by_index();
+        if self.layout.is_identity() {
+            return labels;
+        }
+        // in id order, numbered again by first appearance
+        let labels = self.layout.elems_by_id(&labels).into_owned();
+        let mut renamed = vec![u32::MAX; labels.len()];
+        let mut next = 0u32;
+        labels
+            .iter()
+            .map(|&l| {
+                if l == u32::MAX {
+                    return l;
+                }
+                if renamed[l as usize] == u32::MAX {
+                    renamed[l as usize] = next;
+                    next += 1;
+                }
+                renamed[l as usize]
+            })
+            .collect()
+    }
+
+    /// [`Self::fragment_labels`] per internal index, numbered in internal
+    /// order.
+    fn fragment_labels_by_index(&self) -> Vec<u32> {
         let n = self.nodes.x.len();
         let mut parent: Vec<u32> = (0..n as u32).collect();
         fn find(parent: &mut [u32], mut i: u32) -> u32 {

@@ -69,6 +69,22 @@ impl FractureModel {
     }
 }
 
+impl FractureModel {
+    /// Moves the per-node and per-element values to a new order
+    /// (`order[new] = old`) and maps the bonds' nodes (`node_map[old] =
+    /// new`): part of [`Simulation::renumber`].
+    pub fn renumber(&mut self, node_order: &[u32], elem_order: &[u32], node_map: &[u32]) {
+        // sized as the next check would size them
+        self.cracked.resize(node_order.len(), false);
+        self.factor_seen.resize(elem_order.len(), 0.0);
+        self.cracked = node_order.iter().map(|&o| self.cracked[o as usize]).collect();
+        self.factor_seen = elem_order.iter().map(|&o| self.factor_seen[o as usize]).collect();
+        for b in &mut self.bonds {
+            b.nodes = b.nodes.map(|v| node_map[v as usize]);
+        }
+    }
+}
+
 /// How well insertions have kept mass and momentum (DESIGN §4.4: both are
 /// unchanged by an insertion).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -170,8 +186,11 @@ impl Simulation {
         let mut edits = Edits::default();
         let mut owed: Vec<Option<(f64, f64)>> = Vec::new();
         if !candidates.is_empty() {
-            candidates
-                .sort_by(|&a, &b| fr.node_factor[b as usize].total_cmp(&fr.node_factor[a as usize]).then(a.cmp(&b)));
+            // ties by id: the order does not depend on the layout
+            let id = |p: u32| self.layout.node_id(p);
+            candidates.sort_by(|&a, &b| {
+                fr.node_factor[b as usize].total_cmp(&fr.node_factor[a as usize]).then(id(a).cmp(&id(b)))
+            });
             edits = plan(
                 &self.elems.conn,
                 &self.elems.active,

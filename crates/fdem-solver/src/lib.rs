@@ -28,6 +28,7 @@ pub mod material_point;
 mod model;
 mod passes;
 mod readout;
+mod renumber;
 mod setup;
 mod simulation;
 mod topology;

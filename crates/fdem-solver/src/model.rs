@@ -67,6 +67,14 @@ pub struct Settings {
     // written after the format-1 state in checkpoints (checkpoint.rs)
     #[serde(skip)]
     pub mass_scaling: Option<f64>,
+    /// Spatial renumbering (docs/renumbering.md): once crack insertion has
+    /// grown the element count by this fraction since the last renumbering
+    /// (or the start), nodes and elements are put back in the order of a
+    /// Hilbert curve through their positions, for memory locality. Ids,
+    /// and so everything read out, stay in creation order. `None`: never.
+    // written in format 4 of checkpoints (checkpoint.rs)
+    #[serde(skip)]
+    pub renumber: Option<f64>,
 }
 
 impl Default for Settings {
@@ -79,6 +87,7 @@ impl Default for Settings {
             dt_interval: 100,
             energy_growth: 0.1,
             mass_scaling: None,
+            renumber: None,
         }
     }
 }

@@ -1,5 +1,9 @@
 //! Reading results out of a [`Simulation`]: copies, never views of arrays
-//! that a topology change may reallocate.
+//! that a topology change may reallocate. Rows and the ids inside them are
+//! by id (creation order) whatever the solver's internal order
+//! (`renumber.rs`).
+
+use std::borrow::Cow;
 
 use fdem_element::kinematics::{deformation_gradient, polar_rotation, signed_area};
 use fdem_element::tensor::rotate;
@@ -48,30 +52,42 @@ impl Simulation {
         self.pool.current_num_threads()
     }
 
+    /// Per-element rows computed in internal order, by id.
+    fn elem_rows<T: Clone>(&self, rows: Vec<T>) -> Vec<T> {
+        match self.layout.elems_by_id(&rows) {
+            Cow::Borrowed(_) => rows,
+            Cow::Owned(v) => v,
+        }
+    }
+
     /// Current node coordinates (m).
-    pub fn positions(&self) -> &[Vec2] {
-        &self.nodes.x
+    pub fn positions(&self) -> Cow<'_, [Vec2]> {
+        self.layout.nodes_by_id(&self.nodes.x)
     }
 
     /// Reference node coordinates (m).
-    pub fn reference_positions(&self) -> &[Vec2] {
-        &self.nodes.x0
+    pub fn reference_positions(&self) -> Cow<'_, [Vec2]> {
+        self.layout.nodes_by_id(&self.nodes.x0)
     }
 
-    /// Element connectivity.
-    pub fn triangles(&self) -> &[[u32; 3]] {
-        &self.elems.conn
+    /// Element connectivity (node ids).
+    pub fn triangles(&self) -> Cow<'_, [[u32; 3]]> {
+        if self.layout.is_identity() {
+            return Cow::Borrowed(&self.elems.conn);
+        }
+        let rows = self.elems.conn.iter().map(|t| t.map(|v| self.layout.node_id(v))).collect();
+        Cow::Owned(self.elem_rows(rows))
     }
 
     /// Lumped nodal masses (kg per unit thickness).
-    pub fn masses(&self) -> &[f64] {
-        &self.nodes.mass
+    pub fn masses(&self) -> Cow<'_, [f64]> {
+        self.layout.nodes_by_id(&self.nodes.mass)
     }
 
     /// Every element's density factor from selective mass scaling (1 where
     /// its mass is physical; see [`Settings::mass_scaling`](crate::Settings)).
-    pub fn mass_scale(&self) -> &[f64] {
-        &self.elems.mass_scale
+    pub fn mass_scale(&self) -> Cow<'_, [f64]> {
+        self.layout.elems_by_id(&self.elems.mass_scale)
     }
 
     /// Mass added by selective mass scaling to the active elements,
@@ -93,13 +109,13 @@ impl Simulation {
 
     /// The material index of every element (pieces of a split element
     /// keep their parent's).
-    pub fn element_materials(&self) -> &[u32] {
-        &self.elems.material
+    pub fn element_materials(&self) -> Cow<'_, [u32]> {
+        self.layout.elems_by_id(&self.elems.material)
     }
 
     /// Whether each element is in the model (not excavated).
-    pub fn active(&self) -> &[bool] {
-        &self.elems.active
+    pub fn active(&self) -> Cow<'_, [bool]> {
+        self.layout.elems_by_id(&self.elems.active)
     }
 
     /// Velocities at the current whole step (m/s):
@@ -107,6 +123,15 @@ impl Simulation {
     /// `(v^{n−½} + v^{n+½}) / 2` of the scheme, with constrained components
     /// at their prescribed values.
     pub fn velocities(&self) -> Vec<Vec2> {
+        let rows = self.velocities_by_index();
+        match self.layout.nodes_by_id(&rows) {
+            Cow::Borrowed(_) => rows,
+            Cow::Owned(v) => v,
+        }
+    }
+
+    /// [`Self::velocities`] per internal index.
+    pub(crate) fn velocities_by_index(&self) -> Vec<Vec2> {
         (0..self.n_nodes()).map(|i| self.whole_step_velocity(i)).collect()
     }
 
@@ -202,34 +227,42 @@ impl Simulation {
 
     /// Cauchy stress `σ = R σ̂ Rᵀ` of every element, `[xx, yy, zz, xy]` (Pa).
     pub fn stress(&self) -> Vec<[f64; 4]> {
-        (0..self.n_elements())
-            .map(|e| {
-                let (c, s) = self.rotation(e);
-                rotate(self.elems.stress[e], c, s)
-            })
-            .collect()
+        self.elem_rows(
+            (0..self.n_elements())
+                .map(|e| {
+                    let (c, s) = self.rotation(e);
+                    rotate(self.elems.stress[e], c, s)
+                })
+                .collect(),
+        )
     }
 
     /// Plastic state of every element (co-rotational frame; defaults for
     /// elastic materials).
-    pub fn plastic_states(&self) -> &[PlasticState] {
-        &self.elems.state
+    pub fn plastic_states(&self) -> Cow<'_, [PlasticState]> {
+        self.layout.elems_by_id(&self.elems.state)
     }
 
     /// Failure factor `F = κ H / f_t` of every element (eq. 2.21); 0 for
     /// elastic materials.
     pub fn failure_factors(&self) -> Vec<f64> {
-        (0..self.n_elements())
-            .map(|e| match &self.materials[self.elems.material[e] as usize].plastic {
-                Some(law) => law.failure_factor(&self.elems.state[e]),
-                None => 0.0,
-            })
-            .collect()
+        self.elem_rows(
+            (0..self.n_elements())
+                .map(|e| match &self.materials[self.elems.material[e] as usize].plastic {
+                    Some(law) => law.failure_factor(&self.elems.state[e]),
+                    None => 0.0,
+                })
+                .collect(),
+        )
     }
 
     /// Direction of σ1 at the last tensile plastic step of every element in
     /// the current frame (rad from x): the rotating crack's normal.
     pub fn crack_directions(&self) -> Vec<f64> {
+        self.elem_rows(self.crack_directions_by_index())
+    }
+
+    fn crack_directions_by_index(&self) -> Vec<f64> {
         (0..self.n_elements())
             .map(|e| {
                 let (c, s) = self.rotation(e);
@@ -250,12 +283,20 @@ impl Simulation {
     /// Plastic strain of every element rotated to the current frame,
     /// `[xx, yy, zz, xy]` (tensor shear).
     pub fn plastic_strain(&self) -> Vec<[f64; 4]> {
-        (0..self.n_elements())
-            .map(|e| {
-                let (c, s) = self.rotation(e);
-                rotate(self.elems.state[e].plastic_strain, c, s)
-            })
-            .collect()
+        self.elem_rows(
+            (0..self.n_elements())
+                .map(|e| {
+                    let (c, s) = self.rotation(e);
+                    rotate(self.elems.state[e].plastic_strain, c, s)
+                })
+                .collect(),
+        )
+    }
+
+    /// Spatial renumberings of nodes and elements so far
+    /// ([`Settings::renumber`](crate::Settings::renumber)).
+    pub fn renumberings(&self) -> u64 {
+        self.layout.count
     }
 
     /// Cracks inserted so far (nodes opened), or `None` without fracture.
@@ -271,8 +312,12 @@ impl Simulation {
 
     /// The intact cohesive bonds across young cracks (empty without
     /// fracture).
-    pub fn bonds(&self) -> &[crate::Bond] {
-        self.fracture.as_ref().map_or(&[], |f| &f.bonds)
+    pub fn bonds(&self) -> Cow<'_, [crate::Bond]> {
+        let bonds = self.fracture.as_ref().map_or(&[][..], |f| &f.bonds);
+        if self.layout.is_identity() {
+            return Cow::Borrowed(bonds);
+        }
+        Cow::Owned(bonds.iter().map(|b| crate::Bond { nodes: b.nodes.map(|v| self.layout.node_id(v)), ..*b }).collect())
     }
 
     /// Wall-clock time spent in each phase so far.
@@ -285,10 +330,17 @@ impl Simulation {
         self.contact_stats
     }
 
-    /// The free-surface facets `(start, end, law)`, oriented with the body
-    /// on their left.
+    /// The free-surface facets `(start, end, law)` (node ids), oriented with
+    /// the body on their left, in the order of the element and edge they
+    /// belong to (element ids, edges 0, 1, 2).
     pub fn surface_facets(&self) -> Vec<([u32; 2], u16)> {
-        self.surface.facets.iter().map(|f| (f.nodes, f.law)).collect()
+        let l = &self.layout;
+        let mut rows: Vec<(u32, [u32; 2], u16)> =
+            self.surface.facets.iter().map(|f| (3 * l.elem_id(f.key / 3) + f.key % 3, f.nodes, f.law)).collect();
+        if !l.is_identity() {
+            rows.sort_unstable_by_key(|r| r.0);
+        }
+        rows.into_iter().map(|(_, nodes, law)| (nodes.map(|v| l.node_id(v)), law)).collect()
     }
 
     /// The active contacts of the last step: every node's first contact,
@@ -301,8 +353,8 @@ impl Simulation {
             .chain(c.corner_out.iter().enumerate())
             .filter(|(_, o)| o.facet != NONE)
             .map(|(b, o)| ContactInfo {
-                node: self.surface.nodes[b],
-                facet: self.surface.facets[o.facet as usize].nodes,
+                node: self.layout.node_id(self.surface.nodes[b]),
+                facet: self.surface.facets[o.facet as usize].nodes.map(|v| self.layout.node_id(v)),
                 xi: o.xi,
                 gap: o.gap,
                 normal_force: o.normal_force,
@@ -314,13 +366,19 @@ impl Simulation {
 
     /// Current element areas (m²).
     pub fn areas(&self) -> Vec<f64> {
-        self.elems
-            .conn
-            .iter()
-            .map(|t| {
-                signed_area(&[self.nodes.x[t[0] as usize], self.nodes.x[t[1] as usize], self.nodes.x[t[2] as usize]])
-            })
-            .collect()
+        self.elem_rows(
+            self.elems
+                .conn
+                .iter()
+                .map(|t| {
+                    signed_area(&[
+                        self.nodes.x[t[0] as usize],
+                        self.nodes.x[t[1] as usize],
+                        self.nodes.x[t[2] as usize],
+                    ])
+                })
+                .collect(),
+        )
     }
 
     /// Kinetic energy at the current whole step (J per unit thickness),

@@ -159,6 +159,8 @@ pub struct Simulation {
     pub(crate) held_seen: f64,
     pub(crate) node_partials: Vec<NodePartial>,
     pub(crate) elem_partials: Vec<ElementPartial>,
+    /// Internal index ↔ id of nodes and elements (spatial renumbering).
+    pub(crate) layout: crate::renumber::Layout,
     /// Worker threads; every public entry point that steps runs inside it
     /// once, so the passes' parallel loops cost no cross-thread hand-off.
     pub(crate) pool: Arc<rayon::ThreadPool>,
@@ -523,6 +525,7 @@ impl Simulation {
             bad_node = bad_node.or(p.bad_node);
         }
         if let Some((node, quantity)) = bad_node {
+            let node = self.layout.node_id(node);
             return Err(RunError::NonFinite { node, quantity, step: self.step, time: self.time });
         }
         let clock = Instant::now();
@@ -552,6 +555,7 @@ impl Simulation {
             bad_element = bad_element.or(p.bad_element);
         }
         if let Some(element) = bad_element {
+            let element = self.layout.elem_id(element);
             return Err(RunError::InvertedElement { element, step: self.step, time: self.time });
         }
         // Contact at x^{n+1} on the surfaces the step moved: this step's
@@ -570,6 +574,10 @@ impl Simulation {
             let changed = self.fracture_check();
             self.phase_times.fracture += clock.elapsed().as_secs_f64() - (self.phase_times.topology - topology);
             if changed {
+                let clock = Instant::now();
+                if self.renumber_if_due() {
+                    self.phase_times.topology += clock.elapsed().as_secs_f64();
+                }
                 return Ok(()); // rebuilt forces, contact and the stable step
             }
         }
@@ -660,7 +668,8 @@ impl Simulation {
     /// node must already carry a constraint on the components it sets.
     pub fn set_prescribed_velocity(&mut self, nodes: &[u32], values: &[Vec2]) -> Result<(), SetupError> {
         for (&node, &value) in nodes.iter().zip(values) {
-            let b = self.nodes.bc.get(node as usize).copied().unwrap_or(NO_BC);
+            let index = if (node as usize) < self.nodes.bc.len() { self.layout.node_index(node) } else { node };
+            let b = self.nodes.bc.get(index as usize).copied().unwrap_or(NO_BC);
             if b == NO_BC {
                 return invalid(format!("node {node} has no prescribed velocity to change"));
             }
@@ -686,6 +695,11 @@ pub(crate) fn check_settings(s: &Settings) -> Result<(), SetupError> {
     if let Some(dt) = s.fixed_dt {
         if !(dt > 0.0 && dt.is_finite()) {
             return invalid(format!("fixed time step dt = {dt} must be positive"));
+        }
+    }
+    if let Some(f) = s.renumber {
+        if !(f > 0.0 && f.is_finite()) {
+            return invalid(format!("renumber = {f} must be positive (a fraction of the element count)"));
         }
     }
     if let Some(dt) = s.mass_scaling {

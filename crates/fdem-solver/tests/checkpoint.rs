@@ -140,19 +140,27 @@ fn varint(n: usize) -> usize {
     (usize::BITS - n.max(1).leading_zeros()).div_ceil(7) as usize
 }
 
+/// Bytes of the format-4 block of a run that never renumbered, of `m`
+/// elements at the start: the setting `None`, four empty maps, the base
+/// element count `m` and a zero count.
+fn format4_len(m: usize) -> usize {
+    1 + 4 + varint(m) + 1
+}
+
 #[test]
 fn a_format_1_file_still_reads_with_physical_masses() {
     // format 2 appends the mass-scaling block (density factors, setting,
     // energy term) to the format-1 state, format 3 the corner contacts
-    // (two empty lists without contact); cut them off, mark the file as
+    // (two empty lists without contact), format 4 the renumbering block;
+    // cut them off, mark the file as
     // format 1 and reseal: it must read back as the same run
     let mut a = Simulation::new(plate(6), 1).unwrap();
     a.step(30).unwrap();
     let v3 = a.checkpoint_bytes(b"meta");
     let m = a.triangles().len();
     // postcard: varint length + m f64, `None` (one byte), one f64; two
-    // zero lengths
-    let v1 = downgrade(&v3, 1, varint(m) + 8 * m + 1 + 8 + 2);
+    // zero lengths; the format-4 block
+    let v1 = downgrade(&v3, 1, varint(m) + 8 * m + 1 + 8 + 2 + format4_len(m));
     let (mut b, user) = Simulation::from_checkpoint_bytes(&v1, 1).unwrap();
     assert_eq!(user, b"meta");
     assert!(b.mass_scale().iter().all(|&s| s == 1.0) && b.mass_scale().len() == m);
@@ -186,7 +194,7 @@ fn a_format_2_file_with_contact_reads_without_corner_contacts() {
     // two lists of nb: an empty memory is 22 bytes (facet u32::MAX as a
     // 5-byte varint, two f64, `None`), an empty contact 70 (facet, 7 f64,
     // a bool)
-    let v2 = downgrade(&v3, 2, 2 * varint(nb) + nb * (22 + 70));
+    let v2 = downgrade(&v3, 2, 2 * varint(nb) + nb * (22 + 70) + format4_len(a.n_elements()));
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v2, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v3, "format 2 read back differs");
     a.step(20).unwrap();
