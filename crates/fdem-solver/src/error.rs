@@ -43,7 +43,8 @@ impl From<MeshError> for SetupError {
 pub enum RunError {
     /// An element's area became zero or negative (or not finite).
     InvertedElement {
-        /// The element (smallest id, if several).
+        /// The element (if several, the first in the solver's internal
+        /// order: the smallest id unless the run renumbers).
         element: u32,
         /// The step that produced it.
         step: u64,
@@ -52,7 +53,8 @@ pub enum RunError {
     },
     /// A nodal quantity became NaN or infinite.
     NonFinite {
-        /// The node (smallest id, if several).
+        /// The node (if several, the first in the solver's internal order:
+        /// the smallest id unless the run renumbers).
         node: u32,
         /// Which quantity (`velocity`, `position`).
         quantity: &'static str,

@@ -344,13 +344,16 @@ impl Simulation {
     }
 
     /// The active contacts of the last step: every node's first contact,
-    /// then the second contacts of corner nodes.
+    /// then the second contacts of corner nodes, each by node id.
     pub fn contacts(&self) -> Vec<ContactInfo> {
         let Some(c) = &self.contact else { return Vec::new() };
-        c.out
-            .iter()
-            .enumerate()
-            .chain(c.corner_out.iter().enumerate())
+        let mut order: Vec<(usize, usize)> = (0..2).flat_map(|k| (0..c.out.len()).map(move |b| (k, b))).collect();
+        if !self.layout.is_identity() {
+            order.sort_by_key(|&(k, b)| (k, self.layout.node_id(self.surface.nodes[b])));
+        }
+        order
+            .into_iter()
+            .map(|(k, b)| (b, if k == 0 { &c.out[b] } else { &c.corner_out[b] }))
             .filter(|(_, o)| o.facet != NONE)
             .map(|(b, o)| ContactInfo {
                 node: self.layout.node_id(self.surface.nodes[b]),

@@ -186,8 +186,12 @@ fn permute<T: Clone>(v: &mut Vec<T>, order: &[u32]) {
     *v = order.iter().map(|&o| v[o as usize].clone()).collect();
 }
 
-/// `v` with its rows moved by `map` (old index → new index).
+/// `v` with its rows moved by `map` (old index → new index); an empty `v`
+/// (a per-boundary-node array of a model without contact) stays empty.
 fn scatter<T: Clone + Default>(v: &mut Vec<T>, map: &[u32]) {
+    if v.is_empty() {
+        return;
+    }
     let mut out = vec![T::default(); v.len()];
     for (old, &new) in map.iter().enumerate() {
         out[new as usize] = v[old].clone();
