@@ -261,12 +261,12 @@ fn corner_gap(surface: &Surface, x: &[Vec2], frames: &[FacetFrame], f: u32, at_e
         let [p, q] = surface.facets[k as usize].nodes;
         k != f && if at_end { p == v } else { q == v }
     });
+    let angle = |k: u32| {
+        let (sin, cos) = turn(k);
+        sin.atan2(cos)
+    };
     let mut k = next.next()?;
     for other in next {
-        let angle = |k: u32| {
-            let (sin, cos) = turn(k);
-            sin.atan2(cos)
-        };
         if angle(other) > angle(k) {
             k = other;
         }

@@ -88,22 +88,18 @@ impl ContactModel {
     /// contacts move with their nodes and point at the same facets; the
     /// broad phase is rebuilt at its next update.
     pub fn relabel(&mut self, surface: &Surface, facet_map: &[u32], b_map: &[u32]) {
+        use crate::renumber::scatter;
         let facet = |f: u32| if f == NONE { NONE } else { facet_map[f as usize] };
         for states in [&mut self.states, &mut self.corner_states] {
-            let mut new = vec![ContactState::default(); states.len()];
-            for (old, s) in states.iter().enumerate() {
-                new[b_map[old] as usize] = ContactState { facet: facet(s.facet), ..*s };
-            }
-            *states = new;
+            states.iter_mut().for_each(|s| s.facet = facet(s.facet));
+            scatter(states, b_map);
         }
         for out in [&mut self.out, &mut self.corner_out] {
-            let mut new = vec![NodeContact { facet: NONE, ..Default::default() }; out.len()];
-            for (old, c) in out.iter().enumerate() {
-                let mut c = NodeContact { facet: facet(c.facet), ..*c };
+            for c in out.iter_mut() {
+                c.facet = facet(c.facet);
                 c.locate(surface);
-                new[b_map[old] as usize] = c;
             }
-            *out = new;
+            scatter(out, b_map);
         }
         self.mark_busy();
         self.size_scratch(surface);

@@ -77,8 +77,8 @@ impl FractureModel {
         // sized as the next check would size them
         self.cracked.resize(node_order.len(), false);
         self.factor_seen.resize(elem_order.len(), 0.0);
-        self.cracked = node_order.iter().map(|&o| self.cracked[o as usize]).collect();
-        self.factor_seen = elem_order.iter().map(|&o| self.factor_seen[o as usize]).collect();
+        crate::renumber::permute(&mut self.cracked, node_order);
+        crate::renumber::permute(&mut self.factor_seen, elem_order);
         for b in &mut self.bonds {
             b.nodes = b.nodes.map(|v| node_map[v as usize]);
         }

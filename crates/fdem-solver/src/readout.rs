@@ -60,6 +60,14 @@ impl Simulation {
         }
     }
 
+    /// Per-node rows computed in internal order, by id.
+    fn node_rows<T: Clone>(&self, rows: Vec<T>) -> Vec<T> {
+        match self.layout.nodes_by_id(&rows) {
+            Cow::Borrowed(_) => rows,
+            Cow::Owned(v) => v,
+        }
+    }
+
     /// Current node coordinates (m).
     pub fn positions(&self) -> Cow<'_, [Vec2]> {
         self.layout.nodes_by_id(&self.nodes.x)
@@ -123,11 +131,7 @@ impl Simulation {
     /// `(v^{n−½} + v^{n+½}) / 2` of the scheme, with constrained components
     /// at their prescribed values.
     pub fn velocities(&self) -> Vec<Vec2> {
-        let rows = self.velocities_by_index();
-        match self.layout.nodes_by_id(&rows) {
-            Cow::Borrowed(_) => rows,
-            Cow::Owned(v) => v,
-        }
+        self.node_rows(self.velocities_by_index())
     }
 
     /// [`Self::velocities`] per internal index.

@@ -118,7 +118,17 @@ impl Layout {
         ok(&self.node_id, &self.node_index, n) && ok(&self.elem_id, &self.elem_index, m)
     }
 
-    /// Composes the layout with a reordering: `order[new] = old` internal
+    /// Follows a renumbering (`order[new] = old` internal index, nodes
+    /// and elements): the maps compose with it, and the next renumbering is
+    /// due from the element count now.
+    fn follow(&mut self, node_order: &[u32], elem_order: &[u32]) {
+        Self::reorder(&mut self.node_id, &mut self.node_index, node_order);
+        Self::reorder(&mut self.elem_id, &mut self.elem_index, elem_order);
+        self.base = elem_order.len() as u64;
+        self.count += 1;
+    }
+
+    /// Composes one map pair with a reordering: `order[new] = old` internal
     /// index.
     fn reorder(ids: &mut Vec<u32>, index: &mut Vec<u32>, order: &[u32]) {
         let new_ids: Vec<u32> = order.iter().map(|&old| lookup(ids, old)).collect();
@@ -182,13 +192,13 @@ impl Curve {
 }
 
 /// `v` in the new order: `v_new[i] = v[order[i]]`.
-fn permute<T: Clone>(v: &mut Vec<T>, order: &[u32]) {
+pub(crate) fn permute<T: Clone>(v: &mut Vec<T>, order: &[u32]) {
     *v = order.iter().map(|&o| v[o as usize].clone()).collect();
 }
 
 /// `v` with its rows moved by `map` (old index → new index); an empty `v`
 /// (a per-boundary-node array of a model without contact) stays empty.
-fn scatter<T: Clone + Default>(v: &mut Vec<T>, map: &[u32]) {
+pub(crate) fn scatter<T: Clone + Default>(v: &mut Vec<T>, map: &[u32]) {
     if v.is_empty() {
         return;
     }
@@ -305,10 +315,7 @@ impl Simulation {
         }
         self.surface = surface;
 
-        Layout::reorder(&mut self.layout.node_id, &mut self.layout.node_index, &node_order);
-        Layout::reorder(&mut self.layout.elem_id, &mut self.layout.elem_index, &elem_order);
-        self.layout.base = m as u64;
-        self.layout.count += 1;
+        self.layout.follow(&node_order, &elem_order);
     }
 }
 

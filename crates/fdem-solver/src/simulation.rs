@@ -668,8 +668,7 @@ impl Simulation {
     /// node must already carry a constraint on the components it sets.
     pub fn set_prescribed_velocity(&mut self, nodes: &[u32], values: &[Vec2]) -> Result<(), SetupError> {
         for (&node, &value) in nodes.iter().zip(values) {
-            let index = if (node as usize) < self.nodes.bc.len() { self.layout.node_index(node) } else { node };
-            let b = self.nodes.bc.get(index as usize).copied().unwrap_or(NO_BC);
+            let b = self.nodes.bc.get(self.layout.node_index(node) as usize).copied().unwrap_or(NO_BC);
             if b == NO_BC {
                 return invalid(format!("node {node} has no prescribed velocity to change"));
             }
