@@ -14,6 +14,10 @@ summary) go into one directory; see ``fdem.caving``.
 
     python examples/block_caving.py            # the paper's scale (78 216 triangles)
     python examples/block_caving.py --quick    # a coarse version (4 m elements, to 0.8 s)
+    python examples/block_caving.py --resume   # go on after Ctrl-C or a lost machine
+
+The run keeps its checkpoint (``caving.ckpt``) current after every 0.05 s of
+simulated time; ``--resume`` continues from it bit for bit.
 
 Watch ``energy_residual_J`` in the summary and ``caving_energy.csv``: the
 energy balance is audited as the run goes (docs/caving.md). Wall time and
@@ -23,6 +27,7 @@ element-updates per second of the paper-scale run are in the README.
 from __future__ import annotations
 
 import argparse
+import sys
 from dataclasses import replace
 
 from fdem.caving import CavingCase, run_caving
@@ -48,6 +53,11 @@ def main(argv: list[str] | None = None) -> dict:
     )
     ap.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
     ap.add_argument("--quiet", action="store_true", help="no progress display")
+    ap.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue a stopped run from OUT/caving.ckpt (the same options; --until may be raised)",
+    )
     args = ap.parse_args(argv)
     case = CavingCase.quick() if args.quick else CavingCase()
     if args.until is not None:
@@ -60,7 +70,11 @@ def main(argv: list[str] | None = None) -> dict:
         off = args.mass_scaling.lower() in ("off", "none")
         case = replace(case, mass_scaling=None if off else float(args.mass_scaling))
     out = args.out or ("caving_output_quick" if args.quick else "caving_output")
-    return run_caving(out, case, threads=args.threads, progress=not args.quiet)
+    try:
+        return run_caving(out, case, threads=args.threads, progress=not args.quiet, resume=args.resume)
+    except KeyboardInterrupt:
+        print(f"\nstopped; the state is in {out}/caving.ckpt: add --resume to go on", file=sys.stderr)
+        raise SystemExit(130) from None
 
 
 if __name__ == "__main__":

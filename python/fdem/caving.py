@@ -20,9 +20,10 @@ everything into one directory:
 from __future__ import annotations
 
 import csv
+import math
 import os
 import time as _time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -297,14 +298,185 @@ def run_caving(
     *,
     threads: int | None = None,
     progress: bool = True,
+    resume: bool = False,
 ) -> dict[str, Any]:
     """Builds, equilibrates and runs the caving case, writing all results
-    into ``out`` (see the module docstring); returns the summary as a dict."""
+    into ``out`` (see the module docstring); returns the summary as a dict.
+
+    The run keeps ``out/caving.ckpt`` up to date after every 0.05 s of
+    simulated time and on Ctrl-C or a failure. With ``resume=True`` it
+    continues from that checkpoint instead of starting afresh, bit for bit
+    the run that was not interrupted (the probe table and counters are in
+    the checkpoint too); ``case`` must be the one the run was started with,
+    except for ``until``, which may be raised to run on.
+
+    Raises
+    ------
+    FileNotFoundError
+        ``resume`` and there is no checkpoint in ``out``.
+    ValueError
+        ``resume`` and the checkpoint was written for another case (the
+        differing fields are named) or not by this function.
+    """
     case = case or CavingCase()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    ckpt = out / "caving.ckpt"
     wall0 = _time.perf_counter()
     model = caving_model(case)
+    if resume:
+        sim = _resumed(ckpt, model, case, threads)
+        book = sim.user_data["caving"]
+        if progress:
+            print(f"resuming at t = {sim.time:.4f} s (step {sim.steps}) from {ckpt}", flush=True)
+    else:
+        sim, book = _started(model, case, threads, progress, wall0)
+        # a fresh run replaces what an earlier run left in ``out``: its
+        # series starts here (frame 0), so that every checkpoint holds it
+        sim.run(
+            until=sim.time,
+            output_every=case.output_every,
+            output=out,
+            name="caving",
+            overwrite=True,
+            progress=False,
+            checkpoint=False,
+        )
+    n0 = int(book["elements_initial"])
+    figure_times = case.figure_times()
+    points = np.array([[x, y] for _, x, y in PAPER_PROBES])
+    sample = min(0.05, case.output_every)
+    last = math.ceil(case.until / sample - 1e-9)  # the last sample's index
+    grid = [min(case.until, round(k * sample, 12)) for k in range(last + 1)]
+    figures: list[str] = book["figures"]
+    run0 = _time.perf_counter()
+
+    def mark() -> None:
+        """Brings the counters up to the current state and keeps them with
+        the run, so that a checkpoint always holds the matching ones."""
+        nonlocal run0
+        now = _time.perf_counter()
+        book["updates"] += 0.5 * (book["mark_elements"] + sim.n_elements) * (sim.steps - book["mark_steps"])
+        book["wall"] += now - run0
+        run0 = now
+        book["mark_elements"], book["mark_steps"] = sim.n_elements, sim.steps
+        sim.user_data["caving"] = book
+
+    try:
+        while True:
+            # record every sample time the run has reached (on a resume at the
+            # end of a stretch, the one that the interruption left unrecorded)
+            k = book["sampled"] + 1
+            if k <= last and sim.time >= grid[k] - 1e-12:
+                t = grid[k]
+                for ft in figure_times:
+                    if abs(ft - t) < 0.5 * sample:
+                        path = out / f"fig4_principal_stress_{t:.2f}s.png"
+                        plot_field(
+                            sim,
+                            "principal_stress_1",
+                            path,
+                            title=f"First principal stress σ1, t = {sim.time:.2f} s"
+                            f" (undercut {sim.stages_done * 20:.0f} m)",
+                            limits=(-40.0, 2.0),
+                        )
+                        figures.append(path.name)
+                sig = probe_stress(sim, points)
+                rows = [
+                    [sim.time, float(name), x, y, *(st / 1e6).tolist()]
+                    for (name, x, y), st in zip(PAPER_PROBES, sig, strict=True)
+                ]
+                book["probes"], book["sampled"] = book["probes"] + rows, k
+                mark()
+                sim.save_checkpoint(ckpt)
+                continue
+            if book["sampled"] >= last:
+                break
+            # the series goes on (a resumed run continues the checkpoint's);
+            # the checkpoint is written with the samples, above
+            sim.run(
+                until=grid[book["sampled"] + 1],
+                output_every=case.output_every,
+                output=out,
+                name="caving",
+                progress=progress,
+                checkpoint=False,
+            )
+    except KeyboardInterrupt:
+        # the state is good: keep it with its counters (an interrupted
+        # sample is dropped and taken again), so that ``resume`` continues
+        # from here. After a failure the checkpoint of the last sample stays.
+        _trim(book)
+        mark()
+        sim.save_checkpoint(ckpt)
+        raise
+    wall = book["wall"]
+    updates = book["updates"]
+    rest = book["rest"]
+    probe_rows = book["probes"]
+    figures = list(dict.fromkeys(figures))
+    fig5 = out / f"fig5_caving_{sim.time:.1f}s.png"
+    plot_field(sim, "velocity", fig5, title=f"Fractured, caving rock at t = {sim.time:.2f} s (speed)")
+    figures.append(fig5.name)
+    with open(out / "probes.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["time_s", "node", "x_m", "y_m", "sxx_MPa", "syy_MPa", "szz_MPa", "sxy_MPa"])
+        w.writerows(probe_rows)
+    frags = sim.fragments()
+    with open(out / "fragments.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["fragment", "area_m2", "mass_kg_per_m", "x_m", "y_m", "elements"])
+        for k in range(len(frags["area"])):
+            w.writerow([k, frags["area"][k], frags["mass"][k], *frags["centroid"][k], int(frags["elements"][k])])
+    _plot_fragments(frags["area"], out / "fragments.png")
+    _plot_energy(out / "caving_energy.csv", out / "energy.png")
+    e = sim.energies()
+    x = sim.positions()
+    y = x[sim.triangles()].mean(axis=1)[:, 1]
+    caved = sim.active() & (y < BOTTOM)
+    # rock (not support) that has fallen into the undercut: below the top of
+    # the support layer, which every rock element started above
+    level = BOTTOM + case.support
+    y_ref = sim.reference_positions()[sim.triangles()].mean(axis=1)[:, 1]
+    fallen = sim.active() & (y_ref >= level) & (y < level)
+    # what the balance is measured against: the energy put in since
+    # equilibrium (work of gravity, the top pressure and the supports)
+    supplied = abs(e["external_work"]) + abs(e["support_work"]) + e["kinetic_initial"] + e["elastic_initial"]
+    summary = {
+        "elements_initial": n0,
+        "elements_final": sim.n_elements,
+        "steps": sim.steps - int(book["steps_start"]),
+        "simulated_s": sim.time,
+        "wall_s": wall,
+        "element_updates_per_s": updates / wall if wall > 0 else float("nan"),
+        "threads": sim.threads,
+        "cracks_inserted": sim.insertions,
+        "undercut_stages": sim.stages_done,
+        "fragments": int(len(frags["area"])),
+        "largest_fragment_m2": float(frags["area"][0]) if len(frags["area"]) else 0.0,
+        "fallen_area_m2": float(sim.areas()[fallen].sum()),
+        "caved_area_m2": float(sim.areas()[caved].sum()),
+        "time_step_s": sim.time_step,
+        "added_mass_fraction": sim.added_mass / (sim.masses().sum() - sim.added_mass),
+        "energy_residual_J": e["residual"],
+        "energy_supplied_J": supplied,
+        **rest,
+    }
+    lines = [f"{k}: {v:.6g}" if isinstance(v, float) else f"{k}: {v}" for k, v in summary.items()]
+    lines.append("figures: " + ", ".join(figures + ["fragments.png", "energy.png"]))
+    (out / "summary.txt").write_text("\n".join(lines) + "\n")
+    if progress:
+        print("\n".join(lines), flush=True)
+    summary["figures"] = figures
+    summary["simulation"] = sim
+    return summary
+
+
+def _started(
+    model: Model, case: CavingCase, threads: int | None, progress: bool, wall0: float
+) -> tuple[Simulation, dict[str, Any]]:
+    """A fresh run: the simulation after its equilibrium stage, with mass
+    scaling set, and its bookkeeping (kept in the checkpoints)."""
     n0 = model.mesh.n_elements
     sim = Simulation(model, threads=threads, stiffness_damping=2e-6, renumber=case.renumber)
     built = _time.perf_counter() - wall0
@@ -337,89 +509,44 @@ def run_caving(
         # this fraction of the intact model's: the masses that would are
         # raised instead
         sim.configure(mass_scaling=case.mass_scaling * sim.time_step)
-    figure_times = case.figure_times()
-    points = np.array([[x, y] for _, x, y in PAPER_PROBES])
-    probe_rows: list[list[float]] = []
-    sample = min(0.05, case.output_every)
-    updates = 0.0
-    run0 = _time.perf_counter()
-    steps0 = sim.steps
-    t = 0.0
-    figures: list[str] = []
-    while True:
-        for ft in figure_times:
-            if abs(ft - t) < 0.5 * sample:
-                path = out / f"fig4_principal_stress_{t:.2f}s.png"
-                plot_field(
-                    sim,
-                    "principal_stress_1",
-                    path,
-                    title=f"First principal stress σ1, t = {sim.time:.2f} s (undercut {sim.stages_done * 20:.0f} m)",
-                    limits=(-40.0, 2.0),
-                )
-                figures.append(path.name)
-        sig = probe_stress(sim, points)
-        for (name, x, y), st in zip(PAPER_PROBES, sig, strict=True):
-            probe_rows.append([sim.time, float(name), x, y, *(st / 1e6)])
-        if t >= case.until - 1e-12:
-            break
-        t = min(case.until, t + sample)
-        n_before, s_before = sim.n_elements, sim.steps
-        sim.run(until=t, output_every=case.output_every, output=out, name="caving", overwrite=True, progress=progress)
-        updates += 0.5 * (n_before + sim.n_elements) * (sim.steps - s_before)
-    wall = _time.perf_counter() - run0
-    fig5 = out / f"fig5_caving_{sim.time:.1f}s.png"
-    plot_field(sim, "velocity", fig5, title=f"Fractured, caving rock at t = {sim.time:.2f} s (speed)")
-    figures.append(fig5.name)
-    with open(out / "probes.csv", "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["time_s", "node", "x_m", "y_m", "sxx_MPa", "syy_MPa", "szz_MPa", "sxy_MPa"])
-        w.writerows(probe_rows)
-    frags = sim.fragments()
-    with open(out / "fragments.csv", "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["fragment", "area_m2", "mass_kg_per_m", "x_m", "y_m", "elements"])
-        for k in range(len(frags["area"])):
-            w.writerow([k, frags["area"][k], frags["mass"][k], *frags["centroid"][k], int(frags["elements"][k])])
-    _plot_fragments(frags["area"], out / "fragments.png")
-    _plot_energy(out / "caving_energy.csv", out / "energy.png")
-    e = sim.energies()
-    x = sim.positions()
-    y = x[sim.triangles()].mean(axis=1)[:, 1]
-    caved = sim.active() & (y < BOTTOM)
-    # rock (not support) that has fallen into the undercut: below the top of
-    # the support layer, which every rock element started above
-    level = BOTTOM + case.support
-    y_ref = sim.reference_positions()[sim.triangles()].mean(axis=1)[:, 1]
-    fallen = sim.active() & (y_ref >= level) & (y < level)
-    # what the balance is measured against: the energy put in since
-    # equilibrium (work of gravity, the top pressure and the supports)
-    supplied = abs(e["external_work"]) + abs(e["support_work"]) + e["kinetic_initial"] + e["elastic_initial"]
-    summary = {
+    book: dict[str, Any] = {
+        "case": asdict(case),
         "elements_initial": n0,
-        "elements_final": sim.n_elements,
-        "steps": sim.steps - steps0,
-        "simulated_s": sim.time,
-        "wall_s": wall,
-        "element_updates_per_s": updates / wall if wall > 0 else float("nan"),
-        "threads": sim.threads,
-        "cracks_inserted": sim.insertions,
-        "undercut_stages": sim.stages_done,
-        "fragments": int(len(frags["area"])),
-        "largest_fragment_m2": float(frags["area"][0]) if len(frags["area"]) else 0.0,
-        "fallen_area_m2": float(sim.areas()[fallen].sum()),
-        "caved_area_m2": float(sim.areas()[caved].sum()),
-        "time_step_s": sim.time_step,
-        "added_mass_fraction": sim.added_mass / (sim.masses().sum() - sim.added_mass),
-        "energy_residual_J": e["residual"],
-        "energy_supplied_J": supplied,
-        **rest,
+        "rest": rest,
+        "steps_start": sim.steps,
+        "sampled": -1,  # index of the last sample time recorded
+        "probes": [],
+        "figures": [],
+        "updates": 0.0,  # element-updates of the loop so far
+        "wall": 0.0,  # loop wall time so far (s)
+        "mark_elements": sim.n_elements,
+        "mark_steps": sim.steps,
     }
-    lines = [f"{k}: {v:.6g}" if isinstance(v, float) else f"{k}: {v}" for k, v in summary.items()]
-    lines.append("figures: " + ", ".join(figures + ["fragments.png", "energy.png"]))
-    (out / "summary.txt").write_text("\n".join(lines) + "\n")
-    if progress:
-        print("\n".join(lines), flush=True)
-    summary["figures"] = figures
-    summary["simulation"] = sim
-    return summary
+    sim.user_data["caving"] = book
+    return sim, book
+
+
+def _resumed(ckpt: Path, model: Model, case: CavingCase, threads: int | None) -> Simulation:
+    """The run continued from ``ckpt``, after checking that it is this
+    case's."""
+    if not ckpt.is_file():
+        raise FileNotFoundError(f"{ckpt}: no checkpoint to resume from (run once without resume)")
+    sim = Simulation.from_checkpoint(ckpt, model, threads=threads)
+    book = sim.user_data.get("caving")
+    if not isinstance(book, dict):
+        raise ValueError(f"{ckpt}: not written by run_caving (no caving bookkeeping in it)")
+    saved, mine = book["case"], asdict(case)
+    differ = [
+        f"{k} = {mine[k]!r} (the run: {saved.get(k)!r})" for k in mine if k != "until" and saved.get(k) != mine[k]
+    ]
+    if differ:
+        raise ValueError(f"{ckpt}: written for another case: " + ", ".join(differ) + "; only until may change")
+    book["case"] = mine
+    _trim(book)
+    return sim
+
+
+def _trim(book: dict[str, Any]) -> None:
+    """Drops probe rows of a sample that was interrupted before it was
+    counted (it is taken again)."""
+    del book["probes"][(book["sampled"] + 1) * len(PAPER_PROBES) :]

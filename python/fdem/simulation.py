@@ -109,6 +109,12 @@ class Simulation:
         self._core = _core.Simulation(**arrays, **self._settings, threads=int(threads or 0))
         self._series: dict[tuple[str, str], VtuSeries] = {}
         self._resume: dict[tuple[str, str], dict[str, Any]] = {}
+        self.user_data: dict[str, Any] = {}
+        """The caller's own bookkeeping (JSON-serialisable: numbers, strings,
+        lists, dicts), saved in every checkpoint and given back by
+        :meth:`from_checkpoint`: a driver script that keeps tables beside the
+        run (probe histories, counters) stores them here, so that they always
+        match the state they were saved with."""
 
     @staticmethod
     def _check_settings(
@@ -464,14 +470,17 @@ class Simulation:
     def _meta(self) -> bytes:
         from . import __version__
 
-        return json.dumps(
-            {
-                "fdem": __version__,
-                "fingerprint": self._fingerprint,
-                "settings": self._settings,
-                "series": [series.state() for series in self._series.values()],
-            }
-        ).encode()
+        meta = {
+            "fdem": __version__,
+            "fingerprint": self._fingerprint,
+            "settings": self._settings,
+            "series": [series.state() for series in self._series.values()],
+            "user": self.user_data,
+        }
+        try:
+            return json.dumps(meta).encode()
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"Simulation.user_data must be JSON-serialisable for a checkpoint: {e}") from None
 
     def save_checkpoint(self, path: str | os.PathLike[str]) -> Path:
         """Writes the complete state to ``path`` (atomically: a temporary file,
@@ -534,6 +543,7 @@ class Simulation:
         self._core = core
         self._series = {}
         self._resume = {(st["directory"], st["name"]): st for st in series}
+        self.user_data = meta.get("user", {})
         return self
 
     def _snapshot(self) -> tuple[int, bytes]:
