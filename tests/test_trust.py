@@ -359,7 +359,8 @@ def test_checkpoint_metadata_is_plain_json():
     data = sim._core.checkpoint_bytes(sim._meta())
     s_len, u_len = int.from_bytes(data[16:24], "little"), int.from_bytes(data[24:32], "little")
     meta = json.loads(data[40 + s_len : 40 + s_len + u_len])
-    assert set(meta) == {"fdem", "fingerprint", "settings", "series"}
+    assert set(meta) == {"fdem", "fingerprint", "settings", "series", "user"}
+    assert meta["user"] == {}
 
 
 def test_a_run_description_from_before_mass_scaling_still_restores(tmp_path):

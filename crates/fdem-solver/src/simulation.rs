@@ -75,7 +75,9 @@ pub struct PhaseTimes {
     pub elements: f64,
     /// Contact broad phase (candidate lists).
     pub broad_phase: f64,
-    /// Contact narrow phase and assembly, pressure loads.
+    /// Contact narrow phase and assembly, pressure loads. The element pass
+    /// and the contact evaluation run side by side (`rayon::join`), so their
+    /// clocks overlap.
     pub surface: f64,
     /// Stable-step updates.
     pub time_step: f64,
@@ -235,30 +237,38 @@ impl Simulation {
     /// Pressure and contact forces at the current configuration; `dt` is the
     /// step just taken (for the tangential slip increment).
     fn surface_forces(&mut self, dt: f64) {
-        let clock = Instant::now();
-        self.eval_amplitudes(self.time);
-        passes::pressure_forces(&self.nodes.x, &self.pressure, &self.amplitude_values, &mut self.pressure_force);
-        if let Some(contact) = &mut self.contact {
-            let broad = Instant::now();
-            contact.broad.update(&self.surface, &self.nodes.x);
-            self.phase_times.broad_phase += broad.elapsed().as_secs_f64();
-            let sum = contact.evaluate(
+        let contact = self.contact.as_mut().map(|c| {
+            evaluate_contact(
+                c,
                 &self.surface,
-                &self.nodes.x,
-                &self.nodes.v,
-                &self.nodes.mass,
+                &self.nodes,
                 dt,
                 &mut self.contact_force,
                 &mut self.contact_damping_force,
-            );
-            self.energies.friction += sum.friction;
-            self.energies.contact_elastic = sum.stored;
+            )
+        });
+        self.finish_surface_forces(contact);
+    }
+
+    /// What follows the contact evaluation ([`evaluate_contact`], `None`
+    /// without contact): the pressure loads at the current positions, the
+    /// contact's energies and counts, the bonds across young cracks, and the
+    /// phase clocks.
+    fn finish_surface_forces(&mut self, contact: Option<ContactOutcome>) {
+        let clock = Instant::now();
+        self.eval_amplitudes(self.time);
+        passes::pressure_forces(&self.nodes.x, &self.pressure, &self.amplitude_values, &mut self.pressure_force);
+        if let (Some(contact), Some(out)) = (&self.contact, contact) {
+            self.energies.friction += out.sum.friction;
+            self.energies.contact_elastic = out.sum.stored;
             self.contact_stats = ContactStats {
                 pairs_evaluated: contact.pairs_evaluated,
                 broad_phase_builds: contact.broad.builds,
                 candidate_pairs: contact.broad.pairs() as u64,
-                contacts: sum.contacts,
+                contacts: out.sum.contacts,
             };
+            self.phase_times.broad_phase += out.broad_secs;
+            self.phase_times.surface += out.secs - out.broad_secs;
             self.bond_forces();
         }
         self.phase_times.surface += clock.elapsed().as_secs_f64();
@@ -528,9 +538,15 @@ impl Simulation {
             let node = self.layout.node_id(node);
             return Err(RunError::NonFinite { node, quantity, step: self.step, time: self.time });
         }
-        let clock = Instant::now();
-        {
-            let Simulation { nodes, elems, elem_partials, .. } = self;
+        // The element pass and the contact evaluation read the same
+        // positions and velocities and write disjoint arrays: joined, the
+        // contact's serial assembly overlaps the element work of the other
+        // worker. Each is deterministic by itself, so the results do not
+        // depend on how the two interleave (their clocks overlap).
+        let contact = {
+            let Simulation {
+                nodes, elems, elem_partials, contact, surface, contact_force, contact_damping_force, ..
+            } = self;
             let inp = ElementInputs {
                 x: &nodes.x,
                 v: &nodes.v,
@@ -543,9 +559,21 @@ impl Simulation {
                 dt,
                 plastic: !self.elastic_stage,
             };
-            passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, elem_partials);
-        }
-        self.phase_times.elements += clock.elapsed().as_secs_f64();
+            let (elements, contact) = rayon::join(
+                || {
+                    let clock = Instant::now();
+                    passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, elem_partials);
+                    clock.elapsed().as_secs_f64()
+                },
+                || {
+                    contact
+                        .as_mut()
+                        .map(|c| evaluate_contact(c, surface, nodes, dt, contact_force, contact_damping_force))
+                },
+            );
+            self.phase_times.elements += elements;
+            contact
+        };
         let mut bad_element = None;
         for p in &self.elem_partials {
             self.energies.internal_work += p.internal;
@@ -558,15 +586,16 @@ impl Simulation {
             let element = self.layout.elem_id(element);
             return Err(RunError::InvertedElement { element, step: self.step, time: self.time });
         }
-        // Contact at x^{n+1} on the surfaces the step moved: this step's
-        // slip and friction, its stored energy. A crack insertion after it
-        // re-forms the contacts at the same positions without slip, so the
-        // change of held energy it causes is the topology's alone
-        // (`Energies::resurfacing`). Evaluating contact only after the
-        // insertion, with no slip, lost the step's friction: μ f_n × one
-        // step of slip per sliding node at every insertion step (measured:
-        // 1.5×10⁶ J in 300 steps of the block-caving case).
-        self.surface_forces(dt);
+        // Contact at x^{n+1} on the surfaces the step moved (evaluated
+        // above, beside the element pass): this step's slip and friction,
+        // its stored energy. A crack insertion after it re-forms the
+        // contacts at the same positions without slip, so the change of held
+        // energy it causes is the topology's alone (`Energies::resurfacing`).
+        // Evaluating contact only after the insertion, with no slip, lost the
+        // step's friction: μ f_n × one step of slip per sliding node at
+        // every insertion step (measured: 1.5×10⁶ J in 300 steps of the
+        // block-caving case).
+        self.finish_surface_forces(contact);
         if !self.elastic_stage && self.fracture.as_ref().is_some_and(|f| self.step % f.interval as u64 == 0) {
             let clock = Instant::now();
             let topology = self.phase_times.topology;
@@ -713,4 +742,30 @@ pub(crate) fn check_settings(s: &Settings) -> Result<(), SetupError> {
         return invalid(format!("energy_growth = {} must be finite and >= 0 (0 turns the check off)", s.energy_growth));
     }
     Ok(())
+}
+
+/// What one contact evaluation gives back: the summed partials and its
+/// clocks (s): broad phase, and the whole evaluation including it.
+struct ContactOutcome {
+    sum: fdem_contact::narrow::ContactPartial,
+    broad_secs: f64,
+    secs: f64,
+}
+
+/// One contact evaluation at the nodes' current positions and half-step
+/// velocities: the broad phase brought up to date, then the narrow phase
+/// and the assembly into `force` and `damping` (per boundary node).
+fn evaluate_contact(
+    contact: &mut ContactModel,
+    surface: &Surface,
+    nodes: &Nodes,
+    dt: f64,
+    force: &mut [Vec2],
+    damping: &mut [Vec2],
+) -> ContactOutcome {
+    let clock = Instant::now();
+    contact.broad.update(surface, &nodes.x);
+    let broad_secs = clock.elapsed().as_secs_f64();
+    let sum = contact.evaluate(surface, &nodes.x, &nodes.v, &nodes.mass, dt, force, damping);
+    ContactOutcome { sum, broad_secs, secs: clock.elapsed().as_secs_f64() }
 }
