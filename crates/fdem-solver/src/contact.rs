@@ -70,7 +70,9 @@ impl ContactModel {
         // cost its page faults (2–9 ms at the paper's scale)
         self.partials.clear();
         self.partials.resize(surface.nodes.len().div_ceil(fdem_contact::CHUNK), ContactPartial::default());
-        self.frames.clear();
+        // not cleared: every evaluation writes every frame before reading
+        // any, so only new entries need a value (the clear refilled 24 MB
+        // at every insertion at the paper's scale)
         self.frames.resize(surface.facets.len(), FacetFrame::default());
     }
 
