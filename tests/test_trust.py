@@ -350,6 +350,23 @@ def test_the_index_is_replaced_atomically_and_lists_complete_frames_only(tmp_pat
         assert meshio.read(tmp_path / f).points.shape[0] == sim.n_nodes
 
 
+def test_a_restored_run_checkpointed_before_it_runs_keeps_its_series(tmp_path):
+    """A run restored from a checkpoint reopens its output series only at its
+    first `run()`; a checkpoint written before that must still list the
+    series, or the next restore would start a new one over the existing
+    `.pvd` and refuse (found in review of the caving resume)."""
+    mesh = fdem.Mesh.rectangle(1.0, 1.0, 2, 2)
+    model = fdem.Model(mesh, material=fdem.Elastic(E=60e9, nu=0.25, rho=3100.0)).set_gravity(0.0, -9.81)
+    sim = fdem.Simulation(model, threads=1)
+    sim.run(until=2e-4, output_every=1e-4, output=tmp_path, name="s", progress=False)
+    back = fdem.Simulation.from_checkpoint(tmp_path / "s.ckpt", model)
+    back.save_checkpoint(tmp_path / "s.ckpt")  # before any run()
+    again = fdem.Simulation.from_checkpoint(tmp_path / "s.ckpt", model)
+    again.run(until=4e-4, output_every=1e-4, output=tmp_path, name="s", progress=False)
+    times = [t for t, _ in frames_listed(tmp_path / "s.pvd")]
+    assert times == sorted(times) and len(times) == len(set(times)) and times[-1] >= 4e-4
+
+
 def test_checkpoint_metadata_is_plain_json():
     """The run description in a checkpoint is JSON (never pickle: loading a
     checkpoint cannot run code)."""

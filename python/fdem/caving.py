@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .contact import Interface
+from .errors import SimulationError
 from .joints import JointSet, jointed_rectangle
 from .materials import Elastic, MohrCoulombRankine
 from .model import Model
@@ -304,11 +305,14 @@ def run_caving(
     into ``out`` (see the module docstring); returns the summary as a dict.
 
     The run keeps ``out/caving.ckpt`` up to date after every 0.05 s of
-    simulated time and on Ctrl-C or a failure. With ``resume=True`` it
-    continues from that checkpoint instead of starting afresh, bit for bit
-    the run that was not interrupted (the probe table and counters are in
-    the checkpoint too); ``case`` must be the one the run was started with,
-    except for ``until``, which may be raised to run on.
+    simulated time, at every frame, on Ctrl-C and after a failure (then the
+    step before it), as :meth:`Simulation.run` does, with the probe table
+    and counters inside. With ``resume=True`` it continues from that
+    checkpoint instead of starting afresh, bit for bit the run that was not
+    interrupted; ``case`` must be the one the run was started with, except
+    for ``until``, which may be raised to run on (the Fig. 4 times then
+    follow the new ``until`` from the resume on). A Ctrl-C leaves the frame
+    of the moment it stopped in the series.
 
     Raises
     ------
@@ -331,29 +335,24 @@ def run_caving(
             print(f"resuming at t = {sim.time:.4f} s (step {sim.steps}) from {ckpt}", flush=True)
     else:
         sim, book = _started(model, case, threads, progress, wall0)
-        # a fresh run replaces what an earlier run left in ``out``: its
-        # series starts here (frame 0), so that every checkpoint holds it
-        sim.run(
-            until=sim.time,
-            output_every=case.output_every,
-            output=out,
-            name="caving",
-            overwrite=True,
-            progress=False,
-            checkpoint=False,
-        )
     n0 = int(book["elements_initial"])
     figure_times = case.figure_times()
     points = np.array([[x, y] for _, x, y in PAPER_PROBES])
     sample = min(0.05, case.output_every)
-    last = math.ceil(case.until / sample - 1e-9)  # the last sample's index
-    grid = [min(case.until, round(k * sample, 12)) for k in range(last + 1)]
     figures: list[str] = book["figures"]
     run0 = _time.perf_counter()
 
+    def next_sample() -> float:
+        """The sample time after the last one taken: the next multiple of
+        ``sample``, or ``until``."""
+        if book["samples"] == 0:
+            return 0.0
+        k = math.floor(book["sampled"] / sample + 1e-9) + 1
+        return min(case.until, round(k * sample, 12))
+
     def mark() -> None:
-        """Brings the counters up to the current state and keeps them with
-        the run, so that a checkpoint always holds the matching ones."""
+        """Brings the counters up to the current state; they travel with
+        the run (``user_data``) into its checkpoints."""
         nonlocal run0
         now = _time.perf_counter()
         book["updates"] += 0.5 * (book["mark_elements"] + sim.n_elements) * (sim.steps - book["mark_steps"])
@@ -362,50 +361,57 @@ def run_caving(
         book["mark_elements"], book["mark_steps"] = sim.n_elements, sim.steps
         sim.user_data["caving"] = book
 
+    # The checkpoints are written by ``sim.run`` at the end of each stretch
+    # (and at frames, Ctrl-C and failures), with the bookkeeping of the last
+    # sample before it; a resume at the end of a stretch takes the sample
+    # the interruption left untaken, from the same state.
+    def advance(until: float, overwrite: bool) -> None:
+        sim.run(
+            until=until,
+            output_every=case.output_every,
+            output=out,
+            name="caving",
+            overwrite=overwrite,
+            progress=progress and until > sim.time,
+            checkpoint=ckpt,
+        )
+
     try:
-        while True:
-            # record every sample time the run has reached (on a resume at the
-            # end of a stretch, the one that the interruption left unrecorded)
-            k = book["sampled"] + 1
-            if k <= last and sim.time >= grid[k] - 1e-12:
-                t = grid[k]
-                for ft in figure_times:
-                    if abs(ft - t) < 0.5 * sample:
-                        path = out / f"fig4_principal_stress_{t:.2f}s.png"
-                        plot_field(
-                            sim,
-                            "principal_stress_1",
-                            path,
-                            title=f"First principal stress σ1, t = {sim.time:.2f} s"
-                            f" (undercut {sim.stages_done * 20:.0f} m)",
-                            limits=(-40.0, 2.0),
-                        )
-                        figures.append(path.name)
-                sig = probe_stress(sim, points)
-                rows = [
-                    [sim.time, float(name), x, y, *(st / 1e6).tolist()]
-                    for (name, x, y), st in zip(PAPER_PROBES, sig, strict=True)
-                ]
-                book["probes"], book["sampled"] = book["probes"] + rows, k
-                mark()
-                sim.save_checkpoint(ckpt)
+        if not resume:
+            # a fresh run replaces what an earlier run left in ``out``: its
+            # series starts here (frame 0), and so does its checkpoint
+            advance(sim.time, overwrite=True)
+        while book["samples"] == 0 or book["sampled"] < case.until - 1e-12:
+            t = next_sample()
+            if sim.time < t - 1e-12:
+                advance(t, overwrite=False)
                 continue
-            if book["sampled"] >= last:
-                break
-            # the series goes on (a resumed run continues the checkpoint's);
-            # the checkpoint is written with the samples, above
-            sim.run(
-                until=grid[book["sampled"] + 1],
-                output_every=case.output_every,
-                output=out,
-                name="caving",
-                progress=progress,
-                checkpoint=False,
-            )
-    except KeyboardInterrupt:
-        # the state is good: keep it with its counters (an interrupted
-        # sample is dropped and taken again), so that ``resume`` continues
-        # from here. After a failure the checkpoint of the last sample stays.
+            for ft in figure_times:
+                if abs(ft - t) < 0.5 * sample:
+                    path = out / f"fig4_principal_stress_{t:.2f}s.png"
+                    plot_field(
+                        sim,
+                        "principal_stress_1",
+                        path,
+                        title=f"First principal stress σ1, t = {sim.time:.2f} s"
+                        f" (undercut {sim.stages_done * 20:.0f} m)",
+                        limits=(-40.0, 2.0),
+                    )
+                    figures.append(path.name)
+            sig = probe_stress(sim, points)
+            rows = [
+                [sim.time, float(name), x, y, *(st / 1e6).tolist()]
+                for (name, x, y), st in zip(PAPER_PROBES, sig, strict=True)
+            ]
+            book["probes"], book["samples"], book["sampled"] = book["probes"] + rows, book["samples"] + 1, t
+            mark()
+    except KeyboardInterrupt as stop:
+        # a Ctrl-C while a failure was being handled leaves the failed
+        # state: the checkpoint written before it stays
+        if isinstance(stop.__context__, SimulationError):
+            raise
+        # the state is good: keep it with its counters (a sample that was
+        # interrupted is dropped and taken again)
         _trim(book)
         mark()
         sim.save_checkpoint(ckpt)
@@ -514,7 +520,8 @@ def _started(
         "elements_initial": n0,
         "rest": rest,
         "steps_start": sim.steps,
-        "sampled": -1,  # index of the last sample time recorded
+        "samples": 0,  # sample times recorded
+        "sampled": 0.0,  # the last of them (s)
         "probes": [],
         "figures": [],
         "updates": 0.0,  # element-updates of the loop so far
@@ -549,4 +556,4 @@ def _resumed(ckpt: Path, model: Model, case: CavingCase, threads: int | None) ->
 def _trim(book: dict[str, Any]) -> None:
     """Drops probe rows of a sample that was interrupted before it was
     counted (it is taken again)."""
-    del book["probes"][(book["sampled"] + 1) * len(PAPER_PROBES) :]
+    del book["probes"][book["samples"] * len(PAPER_PROBES) :]

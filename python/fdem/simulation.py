@@ -474,7 +474,10 @@ class Simulation:
             "fdem": __version__,
             "fingerprint": self._fingerprint,
             "settings": self._settings,
-            "series": [series.state() for series in self._series.values()],
+            # with the series a restored run has not reopened yet (it does at
+            # its first ``run``): a checkpoint before that must not lose them
+            "series": [series.state() for series in self._series.values()]
+            + [st for key, st in self._resume.items() if key not in self._series],
             "user": self.user_data,
         }
         try:
