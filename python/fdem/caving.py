@@ -352,14 +352,14 @@ def run_caving(
 
     def mark() -> None:
         """Brings the counters up to the current state; they travel with
-        the run (``user_data``) into its checkpoints."""
+        the run (``book`` is ``sim.user_data["caving"]``) into its
+        checkpoints."""
         nonlocal run0
         now = _time.perf_counter()
         book["updates"] += 0.5 * (book["mark_elements"] + sim.n_elements) * (sim.steps - book["mark_steps"])
         book["wall"] += now - run0
         run0 = now
         book["mark_elements"], book["mark_steps"] = sim.n_elements, sim.steps
-        sim.user_data["caving"] = book
 
     # The checkpoints are written by ``sim.run`` at the end of each stretch
     # (and at frames, Ctrl-C and failures), with the bookkeeping of the last
@@ -403,7 +403,11 @@ def run_caving(
                 [sim.time, float(name), x, y, *(st / 1e6).tolist()]
                 for (name, x, y), st in zip(PAPER_PROBES, sig, strict=True)
             ]
-            book["probes"], book["samples"], book["sampled"] = book["probes"] + rows, book["samples"] + 1, t
+            # rows of a sample cut short before it was counted are dropped
+            # by ``_trim``
+            book["probes"].extend(rows)
+            book["samples"] += 1
+            book["sampled"] = t
             mark()
     except KeyboardInterrupt as stop:
         # a Ctrl-C while a failure was being handled leaves the failed
