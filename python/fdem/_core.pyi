@@ -22,7 +22,12 @@ def validate_mesh(
 ) -> None: ...
 def _panic_selftest() -> None: ...
 def triangulate(
-    outline: NDArray[np.float64], segments: NDArray[np.float64], max_area: float, min_angle: float, max_nodes: int
+    outline: NDArray[np.float64],
+    segments: NDArray[np.float64],
+    max_area: float,
+    min_angle: float,
+    max_nodes: int,
+    size: float = 0.0,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]: ...
 def split_along_edges(
     n_nodes: int, triangles: NDArray[np.int64], cut: NDArray[np.int64]

@@ -243,6 +243,7 @@ def jointed_rectangle(
     origin: tuple[float, float] = (0.0, 0.0),
     min_angle: float = 25.0,
     max_nodes: int = 2_000_000,
+    uniform: bool = False,
 ) -> Mesh:
     """A rectangle meshed so that it conforms to joint traces, each trace
     opened into an interface.
@@ -252,9 +253,15 @@ def jointed_rectangle(
     width, height : float
         Size (m).
     size : float
-        Target element edge length (m); triangles have an area of at most
-        ``√3/4 size²`` and no angle below ``min_angle`` where the geometry
-        allows.
+        Element edge length (m). With ``uniform`` triangles are nearly
+        equilateral with edges of about ``size``: the traces and
+        sides are divided evenly, the inside filled with an equilateral
+        lattice, and the nodes smoothed so that the worst triangle is as
+        good as the geometry allows (an explicit run's step is set by its
+        worst element; docs/meshing.md). Without (the default), Delaunay
+        refinement from the traces alone: triangles have an area of at most ``√3/4 size²``
+        and no angle below ``min_angle`` where the geometry allows, and
+        sizes anywhere down to a fifth of ``size``.
     joint_sets : sequence of JointSet
         Sets whose traces are generated and clipped to the rectangle. A set
         whose spacing is below ``size`` is rejected.
@@ -263,6 +270,10 @@ def jointed_rectangle(
         must lie inside the rectangle and have a length.
     origin : (float, float)
         Lower-left corner (m).
+    uniform : bool
+        Nearly equilateral triangles of edge ``size`` (see ``size``). Trace
+        ends that stop within ``size`` of another set's trace or of the
+        sides are moved onto it (``size / 2`` without ``uniform``).
 
     Returns
     -------
@@ -304,11 +315,16 @@ def jointed_rectangle(
     segs = np.concatenate(pieces) if pieces else np.zeros((0, 2, 2))
     lab = np.concatenate(labels) if labels else np.zeros(0, dtype=int)
     if len(segs):
-        segs = _snap(segs, lab, bounds, 0.5 * s)
+        segs = _snap(segs, lab, bounds, (1.0 if uniform else 0.5) * s)
         segs, lab = _planarize(segs, lab, bounds, 1e-6 * s)
     outline = np.array([[x0, y0], [x0 + w, y0], [x0 + w, y0 + h], [x0, y0 + h]])
     pts, tri, cons = _core.triangulate(
-        outline, np.ascontiguousarray(segs.reshape(-1, 4)), math.sqrt(3) / 4 * s * s, float(min_angle), int(max_nodes)
+        outline,
+        np.ascontiguousarray(segs.reshape(-1, 4)),
+        math.sqrt(3) / 4 * s * s,
+        float(min_angle),
+        int(max_nodes),
+        size=s if uniform else 0.0,
     )
     # constraint edges off the outline are trace edges; label them by the nearest trace
     p0, p1 = pts[cons[:, 0]], pts[cons[:, 1]]

@@ -892,8 +892,11 @@ fn material_point<'py>(
 
 /// Meshes a polygon with line segments embedded (constrained Delaunay with
 /// refinement): returns `(points (n, 2), triangles (m, 3), constraint edges
-/// (k, 2))`. See `fdem_mesh::generate::triangulate`.
+/// (k, 2))`. `size` > 0 gives nearly equilateral triangles of that edge
+/// (m) (`fdem_mesh::generate::triangulate_uniform`); otherwise triangles
+/// have an area of at most `max_area` (`fdem_mesh::generate::triangulate`).
 #[pyfunction]
+#[pyo3(signature = (outline, segments, max_area, min_angle, max_nodes, size=0.0))]
 #[allow(clippy::type_complexity)]
 fn triangulate<'py>(
     py: Python<'py>,
@@ -902,13 +905,18 @@ fn triangulate<'py>(
     max_area: f64,
     min_angle: f64,
     max_nodes: usize,
+    size: f64,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>, Bound<'py, PyArray2<i64>>)> {
     guard(|| {
         let outline = rows::<2>("outline", &outline)?;
         let segs: Vec<[[f64; 2]; 2]> =
             rows::<4>("segments", &segments)?.into_iter().map(|[a, b, c, d]| [[a, b], [c, d]]).collect();
-        let g = fdem_solver::mesh::triangulate(&outline, &segs, max_area, min_angle, max_nodes)
-            .map_err(|e| value_error(e.to_string()))?;
+        let g = if size > 0.0 {
+            fdem_solver::mesh::triangulate_uniform(&outline, &segs, size, min_angle, max_nodes)
+        } else {
+            fdem_solver::mesh::triangulate(&outline, &segs, max_area, min_angle, max_nodes)
+        }
+        .map_err(|e| value_error(e.to_string()))?;
         let tri: Vec<i64> = g.triangles.iter().flatten().map(|&v| v as i64).collect();
         let ce: Vec<i64> = g.constraint_edges.iter().flatten().map(|&v| v as i64).collect();
         Ok((

@@ -48,7 +48,7 @@ pub use fracture::InsertionAudit;
 
 /// Mesh generation and editing, re-exported for the bindings.
 pub mod mesh {
-    pub use fdem_mesh::generate::{triangulate, GenerateError, Generated};
+    pub use fdem_mesh::generate::{triangulate, triangulate_uniform, GenerateError, Generated};
     pub use fdem_mesh::split::split_along_edges;
 }
 pub use loads::{Amplitude, Constraint, PressureLoad};
