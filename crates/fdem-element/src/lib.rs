@@ -31,4 +31,4 @@ pub type Tri<T> = [T; 3];
 pub use corotational::{CorotationalFrame, StrainRate};
 pub use forces::{internal_forces, lumped_mass};
 pub use kinematics::{reference_inverse, signed_area, ReferenceShape};
-pub use stability::{critical_time_step, max_frequency};
+pub use stability::{critical_time_step, max_frequency, max_frequency_deformed};

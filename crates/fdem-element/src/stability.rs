@@ -9,7 +9,7 @@
 //! `Δt = 2 / max_e ω_e` is always stable; unlike `h/c_p` it never
 //! over-estimates.
 
-use crate::kinematics::shape_gradients;
+use crate::kinematics::{shape_gradients, signed_area, ReferenceShape};
 use crate::{Tri, Vec2};
 
 /// Largest eigenvalue of the symmetric 3×3 matrix
@@ -59,6 +59,23 @@ pub fn max_frequency(x: &Tri<Vec2>, lambda: f64, mu: f64, rho: f64) -> f64 {
     let s23 = l33 * l22 * g23;
     let lam = sym3_max_eigenvalue([s11, s22, s33, s12, s13, s23]);
     (3.0 * lam.max(0.0) / rho).sqrt()
+}
+
+/// Highest angular eigenfrequency `ω_e` (rad/s) of a lumped plane-strain CST
+/// deformed from its reference shape `reference` to `x` (m): the stiffness
+/// is the current one, `K_e = A Bᵀ C B` (Cauchy stress on the current
+/// shape, as the internal forces are computed), but the lumped mass stays
+/// `ρ A₀ / 3` of the reference area `A₀`, so
+/// `ω_e² = (3/ρ) (A/A₀) λ_max(Bᵀ C B)`: [`max_frequency`] times `√J`,
+/// `J = A/A₀`. An element stretched to four times its area has twice the
+/// frequency of its current shape at its own density; without the factor
+/// the stable step of fully softened, hugely stretched rock (block
+/// caving's debris) was over-estimated and stiffness damping went unstable
+/// there (docs/meshing.md).
+pub fn max_frequency_deformed(x: &Tri<Vec2>, reference: &ReferenceShape, lambda: f64, mu: f64, rho: f64) -> f64 {
+    let d = reference.dm_inv;
+    let j = 2.0 * signed_area(x) * (d[0] * d[3] - d[1] * d[2]);
+    max_frequency(x, lambda, mu, rho) * j.max(0.0).sqrt()
 }
 
 /// Critical time step (s) of one element, `2/ω_e`, reduced for
@@ -116,6 +133,33 @@ mod tests {
             let w_ref = reference_omega(&x, e, nu, rho);
             assert!((w - w_ref).abs() < 1e-9 * w_ref, "{w} vs {w_ref}");
         }
+    }
+
+    #[test]
+    fn deformed_element_keeps_its_reference_mass() {
+        // K at the current shape (A Bᵀ C B), M = ρ A₀/3 of the reference
+        // area: the generalised eigenvalue, assembled with nalgebra
+        let (e, nu, rho) = (60e9, 0.25, 3100.0);
+        let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        let mu = e / (2.0 * (1.0 + nu));
+        let x0: Tri<Vec2> = [[0.0, 0.0], [1.0, 0.0], [0.5, 0.866]];
+        let reference = crate::kinematics::reference_inverse(&x0).unwrap();
+        for (sx, sy, rot) in [(1.0, 1.0, 0.7), (1.0, 4.0, 0.0), (0.5, 8.0, 1.1), (1.0, 0.9, 0.3)] {
+            let (c, s) = (f64::cos(rot), f64::sin(rot));
+            let x = x0.map(|p| {
+                let q = [sx * p[0], sy * p[1]];
+                [c * q[0] - s * q[1], s * q[0] + c * q[1]]
+            });
+            let j = signed_area(&x) / signed_area(&x0);
+            // reference_omega uses the current area for the mass: rescale
+            let w_ref = reference_omega(&x, e, nu, rho) * j.sqrt();
+            let w = max_frequency_deformed(&x, &reference, lambda, mu, rho);
+            assert!((w - w_ref).abs() < 1e-9 * w_ref, "stretch ({sx}, {sy}): {w} vs {w_ref}");
+        }
+        // a rigid rotation changes nothing
+        let x = x0.map(|p| [p[0] * 0.6 - p[1] * 0.8, p[0] * 0.8 + p[1] * 0.6]);
+        let w0 = max_frequency(&x0, lambda, mu, rho);
+        assert!((max_frequency_deformed(&x, &reference, lambda, mu, rho) - w0).abs() < 1e-9 * w0);
     }
 
     #[test]

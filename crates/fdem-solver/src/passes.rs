@@ -3,7 +3,7 @@
 
 use fdem_element::batch::{corotational_frames, TriLanes, LANES};
 use fdem_element::kinematics::{deformation_gradient, polar_rotation, ReferenceShape};
-use fdem_element::stability::max_frequency;
+use fdem_element::stability::max_frequency_deformed;
 use fdem_element::tensor::rotate;
 use fdem_element::{internal_forces, Vec2};
 use fdem_material::{Elastic, Geometry, MohrCoulombRankine, PlasticState};
@@ -297,7 +297,8 @@ pub(crate) fn element_frequencies_of(inp: &ElementInputs<'_>, scale: &[f64], ele
         omega[e] = if inp.active[e] {
             let mat = &inp.materials[inp.material[e] as usize];
             let rho = mat.density * scale[e];
-            max_frequency(&gather(inp.x, inp.conn[e]), mat.elastic.lambda, mat.elastic.mu, rho)
+            let x = gather(inp.x, inp.conn[e]);
+            max_frequency_deformed(&x, &inp.reference[e], mat.elastic.lambda, mat.elastic.mu, rho)
         } else {
             0.0
         };
@@ -337,7 +338,13 @@ pub(crate) fn element_frequencies(inp: &ElementInputs<'_>, scale: &[f64], omega:
             }
             let mat = &inp.materials[inp.material[e] as usize];
             let x = gather(inp.x, inp.conn[e]);
-            *w = max_frequency(&x, mat.elastic.lambda, mat.elastic.mu, mat.density * scale[e]);
+            *w = max_frequency_deformed(
+                &x,
+                &inp.reference[e],
+                mat.elastic.lambda,
+                mat.elastic.mu,
+                mat.density * scale[e],
+            );
             let xi = 0.5 * inp.beta * *w;
             2.0 / *w * ((1.0 + xi * xi).sqrt() - xi)
         })
