@@ -54,7 +54,8 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument(
         "--uniform-mesh",
         action="store_true",
-        help="nearly equilateral triangles (docs/meshing.md): 1.5x the step, 0.7x the elements; adds more mass (3.9%%), not the default yet",
+        help="nearly equilateral triangles (docs/meshing.md): 1.5x the step, 0.7x the elements; "
+        "adds more mass (3.9%%), not the default yet",
     )
     ap.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
     ap.add_argument("--quiet", action="store_true", help="no progress display")
