@@ -498,22 +498,16 @@ pub fn smooth(points: &mut [Point], triangles: &[[u32; 3]], fixed: &[bool], swee
                 let mut step = 0.2 * limit;
                 while step > 0.01 * limit {
                     let p = points[v];
-                    let better = (0..8)
-                        .map(|k| {
-                            let a = k as f64 * std::f64::consts::FRAC_PI_4;
-                            [p[0] + step * a.cos(), p[1] + step * a.sin()]
-                        })
-                        .map(|c| (worst(points, v, c), c))
-                        .fold(
-                            None,
-                            |b: Option<(f64, Point)>, (w, c)| {
-                                if w > now && b.is_none_or(|(bw, _)| w > bw) {
-                                    Some((w, c))
-                                } else {
-                                    b
-                                }
-                            },
-                        );
+                    // the best of eight moves that beats the worst now
+                    let mut better: Option<(f64, Point)> = None;
+                    for k in 0..8 {
+                        let a = k as f64 * std::f64::consts::FRAC_PI_4;
+                        let c = [p[0] + step * a.cos(), p[1] + step * a.sin()];
+                        let w = worst(points, v, c);
+                        if w > better.map_or(now, |(bw, _)| bw) {
+                            better = Some((w, c));
+                        }
+                    }
                     match better {
                         Some((w, c)) => {
                             points[v] = c;
