@@ -269,8 +269,9 @@ class Simulation:
         return dict(self._core.contacts())
 
     def contact_stats(self) -> dict[str, int]:
-        """Contact-search counters: ``pairs_evaluated`` (candidate pairs, all
-        steps), ``broad_phase_builds``, ``candidate_pairs`` (now),
+        """Contact-search counters: ``pairs_evaluated`` (candidate pairs
+        tested, all steps; a contact whose last facet still holds tests only
+        that one), ``broad_phase_builds``, ``candidate_pairs`` (now),
         ``contacts`` (now)."""
         return dict(self._core.contact_stats())
 

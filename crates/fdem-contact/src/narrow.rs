@@ -433,29 +433,72 @@ fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate
     }
 }
 
-/// Evaluates both contacts of boundary node `b`; returns its busy flags.
-#[inline]
-fn evaluate_node(
-    inp: &NarrowInputs<'_>,
+/// Per contact: (rank, facet, ξ, gap, facing) of the best candidate so far.
+type Best = Option<(u8, u32, f64, f64, f64)>;
+
+/// The candidate search of one boundary node: what every candidate test
+/// reads, and the search's running state.
+struct Search<'i, 'a> {
+    inp: &'i NarrowInputs<'a>,
+    /// Boundary index and mesh id of the node, and its position.
     b: usize,
-    states: [&mut ContactState; 2],
-    out: [&mut NodeContact; 2],
-    acc: &mut ContactPartial,
-) -> u8 {
-    let node = inp.surface.nodes[b] as usize;
-    let s = inp.x[node];
-    let faces = inp.surface.faces[b];
-    let slots = if faces[0] == NONE { 1 } else { 2 };
-    // per contact: (rank, facet, ξ, gap, facing) of the best candidate so far
-    type Best = Option<(u8, u32, f64, f64, f64)>;
-    let mut best: [Best; 2] = [None; 2];
-    let mut own: [Option<Vec2>; 2] = [None; 2];
-    for &f in inp.candidates.row(b) {
+    node: usize,
+    s: Vec2,
+    /// The node's two faces at a corner ([`Surface::faces`]).
+    faces: [u32; 2],
+    /// Contacts the node has: 1 on a smooth stretch, 2 at a corner.
+    slots: usize,
+    best: [Best; 2],
+    /// Each contact's bearing normal, computed on first use.
+    own: [Option<Vec2>; 2],
+}
+
+impl<'i, 'a> Search<'i, 'a> {
+    /// A search for boundary node `b`, nothing found yet.
+    #[inline]
+    fn new(inp: &'i NarrowInputs<'a>, b: usize) -> Self {
+        let node = inp.surface.nodes[b] as usize;
+        let faces = inp.surface.faces[b];
+        let slots = if faces[0] == NONE { 1 } else { 2 };
+        Self { inp, b, node, s: inp.x[node], faces, slots, best: [None; 2], own: [None; 2] }
+    }
+
+    /// Finds each contact's best candidate. The facet a contact touched
+    /// last step ranks 0 ([`rank`]) and so beats every other candidate
+    /// whenever it still qualifies: it is tested first, and the others only
+    /// for a contact that it no longer holds. Most contacts keep their facet
+    /// step after step (a closed joint, a resting block), so most nodes in
+    /// contact test one candidate instead of all of them; what is found is
+    /// the same as testing all of them.
+    #[inline]
+    fn run(&mut self, states: &[&mut ContactState; 2], acc: &mut ContactPartial) {
+        let row = self.inp.candidates.row(self.b);
+        let mut open = [false; 2];
+        for k in 0..self.slots {
+            let f = states[k].facet;
+            if f != NONE && row.binary_search(&f).is_ok() {
+                self.consider(f, [k == 0, k == 1], states, acc);
+            }
+            open[k] = !matches!(self.best[k], Some((0, ..)));
+        }
+        if open.iter().any(|&o| o) {
+            for &f in row {
+                self.consider(f, open, states, acc);
+            }
+        }
+    }
+
+    /// Tests candidate facet `f` for the contacts flagged in `open`, each
+    /// against its memory in `states`, and keeps it where it is the best so
+    /// far.
+    #[inline]
+    fn consider(&mut self, f: u32, open: [bool; 2], states: &[&mut ContactState; 2], acc: &mut ContactPartial) {
+        let inp = self.inp;
         acc.pairs += 1;
         let frame = &inp.frames[f as usize];
-        let (xi, gap) = frame.project(s, frame.a);
+        let (xi, gap) = frame.project(self.s, frame.a);
         if !(-XI_SLACK..=1.0 + XI_SLACK).contains(&xi) || gap >= 0.0 || gap < -frame.depth {
-            continue;
+            return;
         }
         let facet = &inp.surface.facets[f as usize];
         let (ia, ib) = (facet.nodes[0] as usize, facet.nodes[1] as usize);
@@ -470,17 +513,18 @@ fn evaluate_node(
         let gap = if (0.0..=1.0).contains(&xi) {
             gap
         } else {
-            match corner_gap(inp.surface, inp.x, inp.frames, f, xi > 1.0, s) {
-                Some(g) if g >= 0.0 => continue,
+            match corner_gap(inp.surface, inp.x, inp.frames, f, xi > 1.0, self.s) {
+                Some(g) if g >= 0.0 => return,
                 Some(g) => gap.max(g),
                 None => gap,
             }
         };
         let c = Candidate { f, ia, ib, xi, gap, n: frame.normal(), len: frame.len };
-        for k in 0..slots {
+        let (slots, b, faces) = (self.slots, self.b, self.faces);
+        for k in (0..slots).filter(|&k| open[k]) {
             // the face that bears: the node's mean normal, or at a corner
             // the contact's own facet
-            let m = *own[k].get_or_insert_with(|| {
+            let m = *self.own[k].get_or_insert_with(|| {
                 if slots == 1 {
                     node_normal(inp.surface, inp.frames, b)
                 } else {
@@ -495,16 +539,32 @@ fn evaluate_node(
             if facing > -FACING_COS || (!(0.0..=1.0).contains(&xi) && facing > -SMOOTH_COS) {
                 continue;
             }
-            let Some(r) = rank(inp, node, &*states[k], &c) else { continue };
+            let Some(r) = rank(inp, self.node, &*states[k], &c) else { continue };
             // equal ranks: the shallower penetration; an exact tie (a node
             // at the vertex two facets share) goes to the facet that faces
             // the node's face more squarely, so the choice is geometric,
             // not by facet index, and does not depend on the numbering
-            if best[k].is_none_or(|(rb, _, _, g, fb)| r < rb || (r == rb && (gap > g || (gap == g && facing < fb)))) {
-                best[k] = Some((r, f, xi, gap, facing));
+            if self.best[k]
+                .is_none_or(|(rb, _, _, g, fb)| r < rb || (r == rb && (gap > g || (gap == g && facing < fb))))
+            {
+                self.best[k] = Some((r, f, xi, gap, facing));
             }
         }
     }
+}
+
+/// Evaluates both contacts of boundary node `b`; returns its busy flags.
+#[inline]
+fn evaluate_node(
+    inp: &NarrowInputs<'_>,
+    b: usize,
+    states: [&mut ContactState; 2],
+    out: [&mut NodeContact; 2],
+    acc: &mut ContactPartial,
+) -> u8 {
+    let mut search = Search::new(inp, b);
+    search.run(&states, acc);
+    let Search { node, faces, slots, best, .. } = search;
     // a smooth node's second contact stays empty from the topology change
     // that made it smooth (`adopt` starts every memory empty): not touched
     debug_assert!(slots == 2 || (*states[1] == ContactState::default() && out[1].facet == NONE));
@@ -794,6 +854,117 @@ mod tests {
         }
         assert_eq!(forces, want_f);
         assert_eq!(damping, want_d);
+    }
+
+    /// Two blocks pressed 1 cm into each other along the line y = 0: the
+    /// lower one 4 m wide with four top facets, the upper one with its four
+    /// bottom facets shifted `shift` m along x. Positions, surface and
+    /// broad phase (built at these positions).
+    fn pressed_blocks(shift: f64) -> (Vec<Vec2>, Surface, crate::BroadPhase) {
+        let lower = [[0.0, -1.0], [4.0, -1.0], [4.0, 0.0], [3.0, 0.0], [2.0, 0.0], [1.0, 0.0], [0.0, 0.0]];
+        let upper: Vec<Vec2> = [0.0, 1.0, 2.0, 3.0, 4.0]
+            .iter()
+            .map(|&x| [x + 0.25 + shift, -0.01])
+            .chain([[4.25 + shift, 1.0], [0.25 + shift, 1.0]])
+            .collect();
+        let x: Vec<Vec2> = lower.iter().copied().chain(upper.iter().copied()).collect();
+        // each block a counter-clockwise ring (body on the left), the
+        // apex of every facet the block's centroid
+        let mut facets = Vec::new();
+        let mut apex = Vec::new();
+        for (first, n) in [(0u32, 7u32), (7, 7)] {
+            let ids: Vec<u32> = (first..first + n).collect();
+            let c = ids.iter().fold([0.0; 2], |c, &i| [c[0] + x[i as usize][0] / 7.0, c[1] + x[i as usize][1] / 7.0]);
+            for k in 0..ids.len() {
+                facets.push(([ids[k], ids[(k + 1) % ids.len()]], 0));
+                apex.push(c);
+            }
+        }
+        let surface = Surface::new(x.len(), &facets, &x, &apex);
+        let mut broad = crate::BroadPhase::new(0.5);
+        broad.build(&surface, &x);
+        (x, surface, broad)
+    }
+
+    /// The search that tests a contact's last facet first finds what a
+    /// test of every candidate finds, for contacts that keep their facet,
+    /// that slide onto the next one and that lose theirs, at smooth and at
+    /// corner nodes; and a node whose contacts all keep their facets tests
+    /// one candidate per contact.
+    #[test]
+    fn last_facet_first_finds_what_testing_every_candidate_finds() {
+        let laws = [InterfaceLaw::new(1e9, 1e9, 0.5, 0.0, 0.0).unwrap()];
+        let (x0, surface, broad) = pressed_blocks(0.0);
+        let nb = surface.nodes.len();
+        // the upper block moving down fast enough to have entered the 1 cm
+        // within one step (a new contact must come through the facet's line)
+        let v: Vec<Vec2> = (0..x0.len()).map(|i| if i >= 7 { [0.0, -100.0] } else { [0.0; 2] }).collect();
+        let mass = vec![1.0; x0.len()];
+        let mut frames = vec![FacetFrame::default(); surface.facets.len()];
+        fn inputs<'a>(
+            x: &'a [Vec2],
+            frames: &'a [FacetFrame],
+            (v, mass, surface, broad, laws): (
+                &'a [Vec2],
+                &'a [f64],
+                &'a Surface,
+                &'a crate::BroadPhase,
+                &'a [InterfaceLaw],
+            ),
+        ) -> NarrowInputs<'a> {
+            NarrowInputs { x, v, mass, surface, frames, candidates: &broad.candidates, laws, dt: 1e-4 }
+        }
+        let fixed = (&v[..], &mass[..], &surface, &broad, &laws[..]);
+        // the memories of one evaluation at the start
+        facet_frames(&surface, &x0, &v, &mut frames);
+        let (mut states, mut corner_states) = (vec![ContactState::default(); nb], vec![ContactState::default(); nb]);
+        let mut out = vec![NodeContact { facet: NONE, ..Default::default() }; nb];
+        let mut corner_out = out.clone();
+        let mut busy = vec![0; nb];
+        let mut partials = vec![ContactPartial::default(); nb.div_ceil(CHUNK)];
+        let c = Contacts {
+            states: &mut states,
+            corner_states: &mut corner_states,
+            out: &mut out,
+            corner_out: &mut corner_out,
+            busy: &mut busy,
+        };
+        evaluate(&inputs(&x0, &frames, fixed), c, &mut partials);
+        let held = states.iter().chain(&corner_states).filter(|s| s.facet != NONE).count();
+        assert!(held >= 8, "{held} contacts");
+        let (mut kept, mut moved_on, mut lost) = (0, 0, 0);
+        for shift in [0.0, -0.4, 0.4, 1.6] {
+            // the upper block slid along x (the candidate lists still hold)
+            let x: Vec<Vec2> =
+                x0.iter().enumerate().map(|(i, p)| if i >= 7 { [p[0] + shift, p[1]] } else { *p }).collect();
+            facet_frames(&surface, &x, &v, &mut frames);
+            let inp = inputs(&x, &frames, fixed);
+            for b in 0..nb {
+                let (mut s1, mut s2) = (states[b], corner_states[b]);
+                let memories = [&mut s1, &mut s2];
+                let mut acc = ContactPartial::default();
+                let mut fast = Search::new(&inp, b);
+                fast.run(&memories, &mut acc);
+                let mut all = Search::new(&inp, b);
+                for &f in inp.candidates.row(b) {
+                    all.consider(f, [true, true], &memories, &mut ContactPartial::default());
+                }
+                assert_eq!(fast.best, all.best, "node {b}, shift {shift}");
+                if (0..fast.slots).all(|k| matches!(fast.best[k], Some((0, ..)))) {
+                    // every contact kept its facet: one test each
+                    assert_eq!(acc.pairs, fast.slots as u64, "node {b}, shift {shift}");
+                    kept += 1;
+                }
+                for (k, m) in memories.iter().enumerate().take(fast.slots) {
+                    match fast.best[k] {
+                        Some((r, f, ..)) if m.facet != NONE && f != m.facet => moved_on += usize::from(r > 0),
+                        None if m.facet != NONE => lost += 1,
+                        _ => {}
+                    }
+                }
+            }
+        }
+        assert!(kept > 0 && moved_on > 0 && lost > 0, "kept {kept}, moved on {moved_on}, lost {lost}");
     }
 
     /// A node that has just left a facet next to a convex corner of the
