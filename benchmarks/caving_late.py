@@ -40,6 +40,7 @@ def main() -> None:
     ap.add_argument("checkpoint", help="caving.ckpt written by examples/block_caving.py")
     ap.add_argument("--quick", action="store_true", help="the checkpoint is of the quick case")
     ap.add_argument("--size", type=float, default=None, help="element size (m) the run used, if not the default")
+    ap.add_argument("--refined-mesh", action="store_true", help="the run used the refined mesh (--refined-mesh)")
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument(
@@ -51,6 +52,8 @@ def main() -> None:
     case = CavingCase.quick() if args.quick else CavingCase()
     if args.size is not None:
         case = replace(case, size=args.size)
+    if args.refined_mesh:
+        case = replace(case, uniform_mesh=False)
     t0 = time.perf_counter()
     model = caving_model(case)
     built = time.perf_counter() - t0

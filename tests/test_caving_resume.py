@@ -73,9 +73,17 @@ def test_resume_names_what_is_wrong(tmp_path):
     with pytest.raises(ValueError, match="not written by run_caving"):
         run_caving(tmp_path, QUICK, progress=False, resume=True)
     # a setting of the run that the model does not show
-    sim.user_data["caving"] = {"case": asdict(replace(QUICK, mass_scaling=0.7))}
+    sim.user_data["caving"] = {"case": asdict(replace(QUICK, mass_scaling=0.75))}
     sim.save_checkpoint(tmp_path / "caving.ckpt")
-    with pytest.raises(ValueError, match=r"mass_scaling = 0\.8 \(the run: 0\.7\)"):
+    with pytest.raises(ValueError, match=r"mass_scaling = 0\.7 \(the run: 0\.75\)"):
+        run_caving(tmp_path, QUICK, progress=False, resume=True)
+    # a run from before `uniform_mesh` existed was meshed by refinement,
+    # whatever the default is now
+    older = asdict(QUICK)
+    del older["uniform_mesh"]
+    sim.user_data["caving"] = {"case": older}
+    sim.save_checkpoint(tmp_path / "caving.ckpt")
+    with pytest.raises(ValueError, match=r"uniform_mesh = True \(the run: False\)"):
         run_caving(tmp_path, QUICK, progress=False, resume=True)
 
 

@@ -68,16 +68,17 @@ class CavingCase:
     """Sizes of a caving run.
 
     ``size`` is the element edge length (m): 1.0 by default, two elements
-    across the paper's 2 m joint spacing, 78 216 triangles. With 0.75 m
-    (135 672 triangles) the run to 0.5 s gives 5 972 cracks against 4 955,
-    2 883 fragments against 2 739 and the same work supplied within 5%, at
-    2.5× the cost (docs/caving.md); ``uniform_mesh`` meshes with nearly
-    equilateral triangles instead (:func:`jointed_rectangle`,
-    docs/meshing.md: 54 746 triangles at 1.0 m and a 1.5× longer intact
-    step; the paper-scale run in 38 min instead of 65, balance within
-    0.04%, but 3.9% of the mass added by mass scaling against 1%, so not
-    the default yet); the joint sets are the paper's (vertical 60 × 30 × 2 m,
-    horizontal 30 × 15 × 3 m) with their spacings multiplied by
+    across the paper's 2 m joint spacing. The mesh is uniform
+    (``uniform_mesh``, :func:`jointed_rectangle`, docs/meshing.md): nearly
+    equilateral triangles, 54 746 of them at 1.0 m; ``uniform_mesh=False``
+    meshes by Delaunay refinement from the joint traces instead (78 216
+    triangles down to a fifth of the size, an intact step 0.65 times as
+    long: the paper-scale run takes 1.7 times as long). With 0.75 m on the
+    refined mesh (135 672 triangles) the run to 0.5 s gives 5 972 cracks
+    against 4 955, 2 883 fragments against 2 739 and the same work supplied
+    within 5%, at 2.5× the cost (docs/caving.md). The joint sets are the
+    paper's (vertical 60 × 30 × 2 m, horizontal 30 × 15 × 3 m) with their
+    spacings multiplied by
     ``joint_scale`` (1 at the paper's scale); the support layer is
     ``support`` m thick; the undercut advances ``step`` m each way every
     ``interval`` s from ``start`` until it is ``undercut`` m wide. Cracks
@@ -100,8 +101,9 @@ class CavingCase:
     for the whole run after the equilibrium stage (selective mass scaling,
     docs/mass_scaling.md; ``None`` turns it off): without it, the contact
     springs of fragment corners with a single element halve the step once
-    the rock cracks. 0.8 adds 0.14% of the mass by 0.5 s at the paper's
-    scale (1.0: 0.77%); the added mass is reported in the summary.
+    the rock cracks. 0.7 adds 0.5% of the mass in the quick case (0.8: 2.6%,
+    on the uniform mesh, whose intact step is long: docs/mass_scaling.md);
+    the added mass is reported in the summary.
     ``renumber`` is the growth of the element count by crack insertion after
     which the kernel renumbers nodes and elements along a Hilbert curve
     (:class:`Simulation`, docs/renumbering.md): a speed setting, which
@@ -119,15 +121,15 @@ class CavingCase:
     insert_at: float = 1.0
     cap: float = 5.0
     min_size: float = 0.6
-    mass_scaling: float | None = 0.8
+    mass_scaling: float | None = 0.7
     renumber: float | None = 0.05
-    uniform_mesh: bool = False
+    uniform_mesh: bool = True
 
     @staticmethod
     def quick() -> CavingCase:
         """A coarse, fast version for tests and the demo: 4 m elements, joint
         spacings ×4, the undercut advanced every 0.06 s, run to 0.8 s
-        (about 30 s on 2 cores, 4 872 elements at the start)."""
+        (about 15 s on 2 cores, 3 395 elements at the start)."""
         return CavingCase(size=4.0, joint_scale=4.0, support=5.0, until=0.8, interval=0.06, output_every=0.2)
 
     def figure_times(self) -> list[float]:
@@ -543,6 +545,11 @@ def _started(
     return sim, book
 
 
+#: What runs made before a field of :class:`CavingCase` existed did, where
+#: that differs from the field's default now.
+_BEFORE_FIELD = {"uniform_mesh": False}
+
+
 def _resumed(ckpt: Path, model: Model, case: CavingCase, threads: int | None) -> Simulation:
     """The run continued from ``ckpt``, after checking that it is this
     case's."""
@@ -552,8 +559,11 @@ def _resumed(ckpt: Path, model: Model, case: CavingCase, threads: int | None) ->
     book = sim.user_data.get("caving")
     if not isinstance(book, dict):
         raise ValueError(f"{ckpt}: not written by run_caving (no caving bookkeeping in it)")
-    # a field the checkpoint does not name (added since) had its default
-    saved, mine, default = book["case"], asdict(case), asdict(CavingCase())
+    # a field the checkpoint does not name (added since) had the value that
+    # reproduces the runs made before it: its default, or what the default
+    # was then (the uniform mesh became the default after the field came)
+    saved, mine = book["case"], asdict(case)
+    default = {**asdict(CavingCase()), **_BEFORE_FIELD}
     differ = [
         f"{k} = {mine[k]!r} (the run: {saved.get(k, default[k])!r})"
         for k in mine
