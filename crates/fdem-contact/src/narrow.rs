@@ -781,15 +781,24 @@ mod tests {
         mut states: Vec<ContactState>,
         mut corner_states: Vec<ContactState>,
     ) -> ([Vec<NodeContact>; 2], Vec<ContactPartial>) {
+        evaluate_in_place(inp, &mut states, &mut corner_states)
+    }
+
+    /// [`evaluate_once`], leaving the updated memories in place.
+    fn evaluate_in_place(
+        inp: &NarrowInputs<'_>,
+        states: &mut [ContactState],
+        corner_states: &mut [ContactState],
+    ) -> ([Vec<NodeContact>; 2], Vec<ContactPartial>) {
         let nb = states.len();
         let mut out = vec![NodeContact { facet: NONE, ..Default::default() }; nb];
         let mut corner_out = out.clone();
         let mut partials = vec![ContactPartial::default(); nb.div_ceil(CHUNK)];
         let mut busy = vec![0; nb];
-        mark_busy(&states, &corner_states, &mut busy);
+        mark_busy(states, corner_states, &mut busy);
         let c = Contacts {
-            states: &mut states,
-            corner_states: &mut corner_states,
+            states: &mut *states,
+            corner_states: &mut *corner_states,
             out: &mut out,
             corner_out: &mut corner_out,
             busy: &mut busy,
@@ -798,7 +807,7 @@ mod tests {
         // the flags the evaluation left are those of its memories, and every
         // contact has a memory (what the skipping and the assembly rely on)
         let mut expected = vec![0; nb];
-        mark_busy(&states, &corner_states, &mut expected);
+        mark_busy(states, corner_states, &mut expected);
         assert_eq!(busy, expected, "busy flags out of step with the memories");
         for (k, list) in [&out, &corner_out].into_iter().enumerate() {
             assert!(list.iter().zip(&busy).all(|(c, f)| c.facet == NONE || f & (1 << k) != 0));
@@ -918,18 +927,7 @@ mod tests {
         // the memories of one evaluation at the start
         facet_frames(&surface, &x0, &v, &mut frames);
         let (mut states, mut corner_states) = (vec![ContactState::default(); nb], vec![ContactState::default(); nb]);
-        let mut out = vec![NodeContact { facet: NONE, ..Default::default() }; nb];
-        let mut corner_out = out.clone();
-        let mut busy = vec![0; nb];
-        let mut partials = vec![ContactPartial::default(); nb.div_ceil(CHUNK)];
-        let c = Contacts {
-            states: &mut states,
-            corner_states: &mut corner_states,
-            out: &mut out,
-            corner_out: &mut corner_out,
-            busy: &mut busy,
-        };
-        evaluate(&inputs(&x0, &frames, fixed), c, &mut partials);
+        evaluate_in_place(&inputs(&x0, &frames, fixed), &mut states, &mut corner_states);
         let held = states.iter().chain(&corner_states).filter(|s| s.facet != NONE).count();
         assert!(held >= 8, "{held} contacts");
         let (mut kept, mut moved_on, mut lost) = (0, 0, 0);
