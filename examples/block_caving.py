@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> dict:
         "--refined-mesh",
         action="store_true",
         help="Delaunay refinement from the joint traces instead of the uniform mesh (docs/meshing.md): "
-        "1.4x the elements, 0.65x the step",
+        "1.4x the elements, 0.65x the intact step",
     )
     ap.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
     ap.add_argument("--quiet", action="store_true", help="no progress display")
