@@ -254,14 +254,14 @@ def jointed_rectangle(
         Size (m).
     size : float
         Element edge length (m). With ``uniform`` triangles are nearly
-        equilateral with edges of about ``size``: the traces and
-        sides are divided evenly, the inside filled with an equilateral
-        lattice, and the nodes smoothed so that the worst triangle is as
-        good as the geometry allows (an explicit run's step is set by its
-        worst element; docs/meshing.md). Without (the default), Delaunay
-        refinement from the traces alone: triangles have an area of at most ``√3/4 size²``
-        and no angle below ``min_angle`` where the geometry allows, and
-        sizes anywhere down to a fifth of ``size``.
+        equilateral with edges of about ``size``: the traces and sides are
+        divided evenly, the inside filled with an equilateral lattice, and
+        the nodes smoothed so that the worst triangle is as good as the
+        geometry allows (an explicit run's step is set by its worst
+        element; docs/meshing.md). Without (the default), Delaunay
+        refinement from the traces alone: triangles have an area of at
+        most ``√3/4 size²`` and no angle below ``min_angle`` where the
+        geometry allows, and sizes anywhere down to a fifth of ``size``.
     joint_sets : sequence of JointSet
         Sets whose traces are generated and clipped to the rectangle. A set
         whose spacing is below ``size`` is rejected.
