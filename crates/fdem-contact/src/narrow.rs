@@ -368,9 +368,6 @@ pub fn evaluate(inp: &NarrowInputs<'_>, c: Contacts<'_>, partials: &mut [Contact
 struct Candidate {
     /// The facet.
     f: u32,
-    /// Its nodes (mesh ids).
-    ia: usize,
-    ib: usize,
     /// Projection parameter (unclamped) and gap (m, negative inside).
     xi: f64,
     gap: f64,
@@ -424,7 +421,8 @@ fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate
         if !no_deeper(state.depth) {
             return None;
         }
-        let (a, b) = (inp.x[c.ia], inp.x[c.ib]);
+        let [ia, ib] = inp.surface.facets[c.f as usize].nodes;
+        let (a, b) = (inp.x[ia as usize], inp.x[ib as usize]);
         let e = [b[0] - a[0], b[1] - a[1]];
         let parallel = (d[0] * e[0] + d[1] * e[1]).abs() >= SMOOTH_COS * (d[0] * d[0] + d[1] * d[1]).sqrt() * c.len;
         Some(if parallel { 1 } else { 2 })
@@ -500,8 +498,6 @@ impl<'i, 'a> Search<'i, 'a> {
         if !(-XI_SLACK..=1.0 + XI_SLACK).contains(&xi) || gap >= 0.0 || gap < -frame.depth {
             return;
         }
-        let facet = &inp.surface.facets[f as usize];
-        let (ia, ib) = (facet.nodes[0] as usize, facet.nodes[1] as usize);
         // Past an end of the facet (the slack that lets a node slide over a
         // vertex), at a convex corner of the other body, the facet's line
         // runs outside that body: the depth is the lesser of the two
@@ -509,17 +505,12 @@ impl<'i, 'a> Search<'i, 'a> {
         // planes), and a node outside the next facet's line is not in
         // contact at all. Measured against the line alone, a node that has
         // just left the next facet would start with a deep penetration and
-        // its spring energy would appear from nothing.
-        let gap = if (0.0..=1.0).contains(&xi) {
-            gap
-        } else {
-            match corner_gap(inp.surface, inp.x, inp.frames, f, xi > 1.0, self.s) {
-                Some(g) if g >= 0.0 => return,
-                Some(g) => gap.max(g),
-                None => gap,
-            }
-        };
-        let c = Candidate { f, ia, ib, xi, gap, n: frame.normal(), len: frame.len };
+        // its spring energy would appear from nothing. Worked out only for
+        // a candidate that some contact faces (most that get this far do
+        // not: a facet of the node's own body across a concave corner).
+        let on_facet = (0.0..=1.0).contains(&xi);
+        let mut corner: Option<Option<f64>> = None;
+        let mut c = Candidate { f, xi, gap, n: frame.normal(), len: frame.len };
         let (slots, b, faces) = (self.slots, self.b, self.faces);
         for k in (0..slots).filter(|&k| open[k]) {
             // the face that bears: the node's mean normal, or at a corner
@@ -536,9 +527,18 @@ impl<'i, 'a> Search<'i, 'a> {
             // lies along it slides on: a face at an angle (the crack face at
             // a block's corner next to a separating piece's edge) would
             // touch a facet it has already passed
-            if facing > -FACING_COS || (!(0.0..=1.0).contains(&xi) && facing > -SMOOTH_COS) {
+            if facing > -FACING_COS || (!on_facet && facing > -SMOOTH_COS) {
                 continue;
             }
+            if !on_facet {
+                let g = *corner.get_or_insert_with(|| corner_gap(inp.surface, inp.x, inp.frames, f, xi > 1.0, self.s));
+                match g {
+                    Some(g) if g >= 0.0 => return,
+                    Some(g) => c.gap = gap.max(g),
+                    None => {}
+                }
+            }
+            let gap = c.gap;
             let Some(r) = rank(inp, self.node, &*states[k], &c) else { continue };
             // equal ranks: the shallower penetration; an exact tie (a node
             // at the vertex two facets share) goes to the facet that faces
