@@ -260,7 +260,16 @@ def test_quick_caving_writes_its_results(quick_caving):
     with open(out / "fragments.csv", newline="") as f:
         frags = list(csv.DictReader(f))
     assert len(frags) == summary["fragments"]
-    assert "energy_residual_J" in (out / "summary.txt").read_text()
+    text = (out / "summary.txt").read_text()
+    assert "energy_residual_J" in text
+    # where the loop's time went: every phase of the step is clocked inside
+    # the loop (each alone within its wall time), and the element pass and
+    # the contact evaluation, the bulk of a step, were both clocked
+    phases = {k: v for k, v in summary.items() if k.startswith("phase_")}
+    assert set(phases) == {f"phase_{k}_s" for k in summary["simulation"].phase_times()}
+    assert all(0.0 <= v <= summary["wall_s"] for v in phases.values()), phases
+    assert phases["phase_elements_s"] > 0.0 and phases["phase_surface_s"] > 0.0
+    assert "phase_elements_s" in text
 
 
 def test_figure_times_are_each_drawn_once():

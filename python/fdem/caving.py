@@ -349,6 +349,10 @@ def run_caving(
     sample = min(0.05, case.output_every)
     figures: list[str] = book["figures"]
     run0 = _time.perf_counter()
+    # where the loop's time goes, per phase of the step (checkpoints of runs
+    # from before this was kept start it at the resume)
+    phases: dict[str, float] = book.setdefault("phases", {})
+    phases0 = sim.phase_times()
 
     def next_sample() -> float:
         """The sample time after the last one taken: the next multiple of
@@ -362,11 +366,15 @@ def run_caving(
         """Brings the counters up to the current state; they travel with
         the run (``book`` is ``sim.user_data["caving"]``) into its
         checkpoints."""
-        nonlocal run0
+        nonlocal run0, phases0
         now = _time.perf_counter()
         book["updates"] += 0.5 * (book["mark_elements"] + sim.n_elements) * (sim.steps - book["mark_steps"])
         book["wall"] += now - run0
         run0 = now
+        clocks = sim.phase_times()
+        for k, v in clocks.items():
+            phases[k] = phases.get(k, 0.0) + v - phases0[k]
+        phases0 = clocks
         book["mark_elements"], book["mark_steps"] = sim.n_elements, sim.steps
 
     # The checkpoints are written by ``sim.run`` at the end of each stretch
@@ -479,6 +487,9 @@ def run_caving(
         "energy_residual_J": e["residual"],
         "energy_supplied_J": supplied,
         **rest,
+        # the element pass and the contact evaluation run side by side on
+        # more than one thread: their clocks overlap
+        **{f"phase_{k}_s": v for k, v in phases.items()},
     }
     lines = [f"{k}: {v:.6g}" if isinstance(v, float) else f"{k}: {v}" for k, v in summary.items()]
     lines.append("figures: " + ", ".join(figures + ["fragments.png", "energy.png"]))

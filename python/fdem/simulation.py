@@ -283,8 +283,10 @@ class Simulation:
     def phase_times(self) -> dict[str, float]:
         """Wall-clock seconds spent so far in each phase of the step
         (``nodes``, ``elements``, ``broad_phase``, ``surface``, ``time_step``,
-        ``fracture``);
-        for profiling, results never depend on them."""
+        ``fracture``, ``topology``); for profiling, results never depend on
+        them. On more than one thread the element pass (``elements``) and
+        the contact evaluation (``broad_phase``, ``surface``) run side by
+        side, so their clocks overlap."""
         return dict(self._core.phase_times())
 
     def surface_facets(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
