@@ -2,6 +2,7 @@
 //! the boundary nodes, and per node its own facets.
 
 use fdem_mesh::Csr;
+use rayon::prelude::*;
 
 use crate::{Vec2, NONE};
 
@@ -65,25 +66,23 @@ impl Surface {
     /// [`Surface::new`] with a stable key per facet (strictly ascending).
     pub fn with_keys(n_nodes: usize, facets: &[([u32; 2], u16)], x_ref: &[Vec2], apex: &[Vec2], keys: &[u32]) -> Self {
         debug_assert!(keys.windows(2).all(|w| w[0] < w[1]));
-        let mut surface_facets = Vec::with_capacity(facets.len());
-        for (k, &([a, b], law)) in facets.iter().enumerate() {
-            let (pa, pb) = (x_ref[a as usize], x_ref[b as usize]);
-            let d = [pb[0] - pa[0], pb[1] - pa[1]];
-            // a plain square root: `hypot` (careful about overflow, which
-            // reference lengths never approach) is several times slower,
-            // and surfaces are rebuilt at every crack insertion
-            let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
-            let c = apex[k];
-            let height = ((c[0] - pa[0]) * d[1] - (c[1] - pa[1]) * d[0]).abs() / length;
-            surface_facets.push(SurfaceFacet {
-                nodes: [a, b],
-                law,
-                length,
-                depth: 0.5 * height,
-                key: keys[k],
-                ends: [NONE; 2],
-            });
-        }
+        // parallel (surfaces are rebuilt at every crack insertion); an
+        // indexed collect keeps the order
+        let surface_facets = facets
+            .par_iter()
+            .enumerate()
+            .with_min_len(crate::CHUNK)
+            .map(|(k, &([a, b], law))| {
+                let (pa, pb) = (x_ref[a as usize], x_ref[b as usize]);
+                let d = [pb[0] - pa[0], pb[1] - pa[1]];
+                // a plain square root: `hypot` (careful about overflow, which
+                // reference lengths never approach) is several times slower
+                let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
+                let c = apex[k];
+                let height = ((c[0] - pa[0]) * d[1] - (c[1] - pa[1]) * d[0]).abs() / length;
+                SurfaceFacet { nodes: [a, b], law, length, depth: 0.5 * height, key: keys[k], ends: [NONE; 2] }
+            })
+            .collect();
         Self::indexed(n_nodes, surface_facets, x_ref)
     }
 
@@ -166,7 +165,10 @@ impl Surface {
     /// only with strain).
     fn find_faces(&mut self, x_ref: &[Vec2]) {
         let normal = |k: u32| self.facet_normal(x_ref, k);
+        // parallel, as above
         self.faces = (0..self.nodes.len())
+            .into_par_iter()
+            .with_min_len(crate::CHUNK)
             .map(|b| {
                 let node = self.nodes[b];
                 let row = self.node_facets.row(b);

@@ -345,26 +345,33 @@ impl Simulation {
                 // a bond adds k ℓ (1/m_a + 1/m_b) to the frequency² of its
                 // nodes, on top of their elements and contact springs
                 let k_c = self.contact.as_ref().map_or(0.0, |c| c.max_stiffness);
-                for bond in &fr.bonds {
-                    let [a, b] = bond.nodes.map(|v| v as usize);
-                    let (ma, mb) = (self.nodes.mass[a], self.nodes.mass[b]);
-                    if ma <= 0.0 || mb <= 0.0 {
-                        continue;
-                    }
-                    let node_w2 = |v: usize, m: f64| {
-                        let we = self.node_frequency(v);
-                        let bi = self.surface.index_of[v];
-                        let wc2 = if bi == crate::NONE {
-                            0.0
-                        } else {
-                            4.0 * k_c * self.surface.tributary_max(bi as usize) / m
+                // parallel, like the contact nodes' minimum above
+                let least = fr
+                    .bonds
+                    .par_iter()
+                    .with_min_len(crate::CHUNK)
+                    .filter_map(|bond| {
+                        let [a, b] = bond.nodes.map(|v| v as usize);
+                        let (ma, mb) = (self.nodes.mass[a], self.nodes.mass[b]);
+                        if ma <= 0.0 || mb <= 0.0 {
+                            return None;
+                        }
+                        let node_w2 = |v: usize, m: f64| {
+                            let we = self.node_frequency(v);
+                            let bi = self.surface.index_of[v];
+                            let wc2 = if bi == crate::NONE {
+                                0.0
+                            } else {
+                                4.0 * k_c * self.surface.tributary_max(bi as usize) / m
+                            };
+                            we * we + wc2
                         };
-                        we * we + wc2
-                    };
-                    let wb2 = bond.stiffness * bond.length * (1.0 / ma + 1.0 / mb);
-                    let w = (node_w2(a, ma).max(node_w2(b, mb)) + wb2).sqrt();
-                    crit = crit.min(2.0 / w);
-                }
+                        let wb2 = bond.stiffness * bond.length * (1.0 / ma + 1.0 / mb);
+                        let w = (node_w2(a, ma).max(node_w2(b, mb)) + wb2).sqrt();
+                        Some(2.0 / w)
+                    })
+                    .reduce(|| f64::INFINITY, f64::min);
+                crit = crit.min(least);
             }
             crit
         })
