@@ -165,7 +165,8 @@ impl Surface {
     /// only with strain).
     fn find_faces(&mut self, x_ref: &[Vec2]) {
         let normal = |k: u32| self.facet_normal(x_ref, k);
-        // parallel, as above
+        // parallel (rebuilt at every crack insertion); the indexed collect
+        // keeps the order
         self.faces = (0..self.nodes.len())
             .into_par_iter()
             .with_min_len(crate::CHUNK)
