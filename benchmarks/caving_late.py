@@ -3,8 +3,8 @@ of thousands of contacts and a crack insertion check every 10 steps.
 Restarts from a checkpoint that `examples/block_caving.py` wrote at the end
 of its run (``<out>/caving.ckpt``), steps it at each thread count and
 reports element-updates per second and the share of each phase (the
-element pass and the contact evaluation run side by side, so on more than
-one thread their shares overlap and add up to more than 100%); checks that
+contact's assembly runs beside the element pass, so on more than one
+thread their shares overlap and may add up to more than 100%); checks that
 every thread count ends on the same bits.
 
 Make the checkpoint, then time it (paper scale, 1.0 m elements):

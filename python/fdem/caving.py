@@ -487,8 +487,8 @@ def run_caving(
         "energy_residual_J": e["residual"],
         "energy_supplied_J": supplied,
         **rest,
-        # the element pass and the contact evaluation run side by side on
-        # more than one thread: their clocks overlap
+        # the contact's assembly runs beside the element pass on more than
+        # one thread: their clocks overlap
         **{f"phase_{k}_s": v for k, v in phases.items()},
     }
     lines = [f"{k}: {v:.6g}" if isinstance(v, float) else f"{k}: {v}" for k, v in summary.items()]

@@ -284,9 +284,9 @@ class Simulation:
         """Wall-clock seconds spent so far in each phase of the step
         (``nodes``, ``elements``, ``broad_phase``, ``surface``, ``time_step``,
         ``fracture``, ``topology``); for profiling, results never depend on
-        them. On more than one thread the element pass (``elements``) and
-        the contact evaluation (``broad_phase``, ``surface``) run side by
-        side, so their clocks overlap."""
+        them. On more than one thread the contact's assembly (part of
+        ``surface``) runs beside the element pass (``elements``), so their
+        clocks overlap."""
         return dict(self._core.phase_times())
 
     def surface_facets(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:

@@ -326,6 +326,13 @@ impl ContactModel {
         forces: &mut [Vec2],
         damping: &mut [Vec2],
     ) -> ContactPartial {
+        self.search(surface, x, v, mass, dt);
+        self.assemble(forces, damping)
+    }
+
+    /// The narrow phase of [`ContactModel::evaluate`] (parallel): every
+    /// boundary node's contacts and their forces, not yet assembled.
+    pub fn search(&mut self, surface: &Surface, x: &[Vec2], v: &[Vec2], mass: &[f64], dt: f64) {
         narrow::facet_frames(surface, x, v, &mut self.frames);
         let inp = NarrowInputs {
             x,
@@ -345,6 +352,12 @@ impl ContactModel {
             busy: &mut self.busy,
         };
         narrow::evaluate(&inp, c, &mut self.partials);
+    }
+
+    /// The assembly of [`ContactModel::evaluate`] (serial, in boundary-node
+    /// order) after [`ContactModel::search`]: the forces into `forces`,
+    /// their dashpot parts into `damping`; returns the summed partials.
+    pub fn assemble(&mut self, forces: &mut [Vec2], damping: &mut [Vec2]) -> ContactPartial {
         narrow::assemble([&self.out, &self.corner_out], &self.busy, forces, damping);
         let mut sum = ContactPartial::default();
         for p in &self.partials {
