@@ -312,25 +312,8 @@ impl ContactModel {
         }
     }
 
-    /// One contact evaluation at positions `x`, velocities `v` (the broad
-    /// phase must be up to date): narrow phase, assembly into `forces` and
-    /// their dashpot parts into `damping` (per boundary node).
-    /// Returns the summed partials.
-    pub fn evaluate(
-        &mut self,
-        surface: &Surface,
-        x: &[Vec2],
-        v: &[Vec2],
-        mass: &[f64],
-        dt: f64,
-        forces: &mut [Vec2],
-        damping: &mut [Vec2],
-    ) -> ContactPartial {
-        self.search(surface, x, v, mass, dt);
-        self.assemble(forces, damping)
-    }
-
-    /// The narrow phase of [`ContactModel::evaluate`] (parallel): every
+    /// The narrow phase of one contact evaluation at positions `x`,
+    /// velocities `v` (parallel; the broad phase must be up to date): every
     /// boundary node's contacts and their forces, not yet assembled.
     pub fn search(&mut self, surface: &Surface, x: &[Vec2], v: &[Vec2], mass: &[f64], dt: f64) {
         narrow::facet_frames(surface, x, v, &mut self.frames);
@@ -354,9 +337,10 @@ impl ContactModel {
         narrow::evaluate(&inp, c, &mut self.partials);
     }
 
-    /// The assembly of [`ContactModel::evaluate`] (serial, in boundary-node
-    /// order) after [`ContactModel::search`]: the forces into `forces`,
-    /// their dashpot parts into `damping`; returns the summed partials.
+    /// The assembly (serial, in boundary-node order) after
+    /// [`ContactModel::search`]: the forces into `forces` (per boundary
+    /// node), their dashpot parts into `damping`; returns the summed
+    /// partials.
     pub fn assemble(&mut self, forces: &mut [Vec2], damping: &mut [Vec2]) -> ContactPartial {
         narrow::assemble([&self.out, &self.corner_out], &self.busy, forces, damping);
         let mut sum = ContactPartial::default();

@@ -554,14 +554,7 @@ impl Simulation {
         // the end of the step to one worker: 9% of a late step on 2
         // threads.) Each is deterministic by itself, so the results do not
         // depend on how the two interleave (their clocks overlap).
-        let searched = self.contact.as_mut().map(|c| {
-            let clock = Instant::now();
-            c.broad.update(&self.surface, &self.nodes.x);
-            let broad_secs = clock.elapsed().as_secs_f64();
-            let clock = Instant::now();
-            c.search(&self.surface, &self.nodes.x, &self.nodes.v, &self.nodes.mass, dt);
-            (broad_secs, clock.elapsed().as_secs_f64())
-        });
+        let searched = self.contact.as_mut().map(|c| search_contact(c, &self.surface, &self.nodes, dt));
         let contact = {
             let Simulation { nodes, elems, elem_partials, contact, contact_force, contact_damping_force, .. } = self;
             let inp = ElementInputs {
@@ -583,10 +576,8 @@ impl Simulation {
                     clock.elapsed().as_secs_f64()
                 },
                 || {
-                    let (c, (broad_secs, search_secs)) = contact.as_mut().zip(searched)?;
-                    let clock = Instant::now();
-                    let sum = c.assemble(contact_force, contact_damping_force);
-                    Some(ContactOutcome { sum, broad_secs, narrow_secs: search_secs + clock.elapsed().as_secs_f64() })
+                    let (c, clocks) = contact.as_mut().zip(searched)?;
+                    Some(assemble_contact(c, clocks, contact_force, contact_damping_force))
                 },
             );
             self.phase_times.elements += elements;
@@ -771,8 +762,8 @@ struct ContactOutcome {
 }
 
 /// One contact evaluation at the nodes' current positions and half-step
-/// velocities: the broad phase brought up to date, then the narrow phase
-/// and the assembly into `force` and `damping` (per boundary node).
+/// velocities: [`search_contact`], then [`assemble_contact`] into `force`
+/// and `damping` (per boundary node).
 fn evaluate_contact(
     contact: &mut ContactModel,
     surface: &Surface,
@@ -781,10 +772,30 @@ fn evaluate_contact(
     force: &mut [Vec2],
     damping: &mut [Vec2],
 ) -> ContactOutcome {
+    let clocks = search_contact(contact, surface, nodes, dt);
+    assemble_contact(contact, clocks, force, damping)
+}
+
+/// The first part of a contact evaluation (parallel): the broad phase
+/// brought up to date, then the narrow phase. Returns their clocks (s).
+fn search_contact(contact: &mut ContactModel, surface: &Surface, nodes: &Nodes, dt: f64) -> (f64, f64) {
     let clock = Instant::now();
     contact.broad.update(surface, &nodes.x);
     let broad_secs = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
-    let sum = contact.evaluate(surface, &nodes.x, &nodes.v, &nodes.mass, dt, force, damping);
-    ContactOutcome { sum, broad_secs, narrow_secs: clock.elapsed().as_secs_f64() }
+    contact.search(surface, &nodes.x, &nodes.v, &nodes.mass, dt);
+    (broad_secs, clock.elapsed().as_secs_f64())
+}
+
+/// The second part (serial): the assembly into `force` and `damping`, with
+/// the clocks of the first.
+fn assemble_contact(
+    contact: &mut ContactModel,
+    (broad_secs, search_secs): (f64, f64),
+    force: &mut [Vec2],
+    damping: &mut [Vec2],
+) -> ContactOutcome {
+    let clock = Instant::now();
+    let sum = contact.assemble(force, damping);
+    ContactOutcome { sum, broad_secs, narrow_secs: search_secs + clock.elapsed().as_secs_f64() }
 }
