@@ -199,6 +199,33 @@ pub struct Update {
     pub fracture_dissipation: f64,
 }
 
+/// What every return from one trial shares: the sorted trial principal
+/// stresses, the fracturing strain, the tensile strength and softening
+/// modulus there, and the six yield functions on the linear softening
+/// branch and past full softening (zero strength). Worked out once per
+/// update instead of once per active set tried (most plastic points try
+/// two or more). A return with a multiplier `x` such that `2G x < −reject`
+/// (Pa) is refused as soon as it is solved: the consistency check with
+/// tolerance `reject` would refuse it (most candidate sets fail so).
+struct Trial {
+    s: [f64; 3],
+    kappa: f64,
+    sy: f64,
+    h: f64,
+    f: [f64; 6],
+    f_exhausted: [f64; 6],
+    reject: f64,
+}
+
+impl Trial {
+    fn new(law: &MohrCoulombRankine, s: [f64; 3], kappa: f64, crack_band: f64, reject: f64) -> Self {
+        let (sy, h) = law.strength(kappa, crack_band);
+        let f = law.yield_functions(s, sy);
+        let f_exhausted = if h == 0.0 { f } else { law.yield_functions(s, 0.0) };
+        Self { s, kappa, sy, h, f, f_exhausted, reject }
+    }
+}
+
 /// A return in principal space, before it is accepted.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PrincipalReturn {
@@ -407,23 +434,45 @@ impl MohrCoulombRankine {
         crack_band: f64,
         exhausted: bool,
     ) -> Option<PrincipalReturn> {
-        let (sy, h) = self.strength(kappa, crack_band);
-        if !exhausted {
-            return self.solve_set(s, active, kappa, sy, h).filter(|r| r.strength >= 0.0);
-        }
-        if h == 0.0 || active & RANKINE == 0 {
-            return None; // already exhausted: the linear branch covers it
-        }
-        let kappa_max = self.tensile_strength / h;
-        self.solve_set(s, active, kappa, 0.0, 0.0).filter(|r| r.kappa >= kappa_max * (1.0 - 1e-12)).map(|mut r| {
-            r.strength = 0.0;
-            r
-        })
+        self.return_to(&Trial::new(self, s, kappa, crack_band, f64::INFINITY), active, exhausted)
     }
 
-    fn solve_set(&self, s: [f64; 3], active: u8, kappa: f64, sy: f64, h: f64) -> Option<PrincipalReturn> {
+    /// [`Self::principal_return`] from a trial whose strength and yield
+    /// functions are worked out once for every set tried.
+    fn return_to(&self, t: &Trial, active: u8, exhausted: bool) -> Option<PrincipalReturn> {
+        if !exhausted {
+            return self.solve_set(t.s, active, t.kappa, t.sy, t.h, &t.f, t.reject).filter(|r| r.strength >= 0.0);
+        }
+        if t.h == 0.0 || active & RANKINE == 0 {
+            return None; // already exhausted: the linear branch covers it
+        }
+        let kappa_max = self.tensile_strength / t.h;
+        self.solve_set(t.s, active, t.kappa, 0.0, 0.0, &t.f_exhausted, t.reject)
+            .filter(|r| r.kappa >= kappa_max * (1.0 - 1e-12))
+            .map(|mut r| {
+                r.strength = 0.0;
+                r
+            })
+    }
+
+    /// The return to the planes of `active` with strength `sy`, softening
+    /// modulus `h` and `f` the yield functions at `s` for `sy`; `None` also
+    /// when a multiplier `x` has `2G x < −reject` (Pa), which
+    /// [`Self::is_consistent`] with tolerance `reject` would refuse.
+    #[allow(clippy::too_many_arguments)]
+    fn solve_set(
+        &self,
+        s: [f64; 3],
+        active: u8,
+        kappa: f64,
+        sy: f64,
+        h: f64,
+        f: &[f64; 6],
+        reject: f64,
+    ) -> Option<PrincipalReturn> {
+        let g2 = 2.0 * self.elastic.mu;
         if active == P13 | P23 | R1 | R2 {
-            return self.left_edge_tensile_corner(s, kappa, sy, h);
+            return self.left_edge_tensile_corner(s, kappa, sy, h, f);
         }
         if active.count_ones() == 1 {
             // one plane (bit k is plane k of ALL): a single division
@@ -433,7 +482,10 @@ impl MohrCoulombRankine {
             if g.is_nan() || g <= 0.0 {
                 return None;
             }
-            let x = self.yield_functions(s, sy)[k] / g;
+            let x = f[k] / g;
+            if x * g2 < -reject {
+                return None;
+            }
             let cn = &self.cn[k];
             let mut multipliers = [0.0; 6];
             multipliers[k] = x;
@@ -457,7 +509,6 @@ impl MohrCoulombRankine {
                 n += 1;
             }
         }
-        let f = self.yield_functions(s, sy);
         let mut g = [[0.0; MAX]; MAX];
         let mut rhs = [0.0; MAX];
         for i in 0..n {
@@ -470,6 +521,9 @@ impl MohrCoulombRankine {
             }
         }
         let x = solve(g, rhs, n)?;
+        if x[..n].iter().any(|&x| x * g2 < -reject) {
+            return None;
+        }
         let mut out = s;
         let mut multipliers = [0.0; 6];
         let mut dk = 0.0;
@@ -494,8 +548,16 @@ impl MohrCoulombRankine {
     /// the σ1 and σ2 multipliers by `±b (1 + sin ψ)` and leaves the plastic
     /// strain and κ unchanged. Solve P13 + R1 + R2, then take the middle of
     /// the range of `b` that keeps all four multipliers non-negative.
-    fn left_edge_tensile_corner(&self, s: [f64; 3], kappa: f64, sy: f64, h: f64) -> Option<PrincipalReturn> {
-        let mut r = self.solve_set(s, P13 | R1 | R2, kappa, sy, h)?;
+    fn left_edge_tensile_corner(
+        &self,
+        s: [f64; 3],
+        kappa: f64,
+        sy: f64,
+        h: f64,
+        f: &[f64; 6],
+    ) -> Option<PrincipalReturn> {
+        // (its multipliers are redistributed below: none refused early)
+        let mut r = self.solve_set(s, P13 | R1 | R2, kappa, sy, h, f, f64::INFINITY)?;
         let (total, c0, d0) = (r.multipliers[0], r.multipliers[3], r.multipliers[4]);
         let k = 1.0 + self.sin_psi;
         let lo = 0.0f64.max(-c0 / k);
@@ -565,19 +627,20 @@ impl MohrCoulombRankine {
             state.crack_band = self.band_width(&geometry, sp.angle());
         }
         let band = if state.crack_band > 0.0 { state.crack_band } else { 1.0 };
+        let t = Trial::new(self, s, state.kappa, band, tol);
         let mut chosen: Option<(u8, PrincipalReturn)> = None;
         for &(set, exhausted) in &RETURN_ORDER {
             if set & RANKINE != 0 && state.crack_band == 0.0 {
                 continue;
             }
-            if let Some(r) = self.principal_return(s, set, state.kappa, band, exhausted) {
+            if let Some(r) = self.return_to(&t, set, exhausted) {
                 if self.is_consistent(&r, tol) {
                     chosen = Some((set, r));
                     break;
                 }
             }
         }
-        let Some((active, r)) = chosen.or_else(|| self.least_violating(s, state, band)) else {
+        let Some((active, r)) = chosen.or_else(|| self.least_violating(&t, state)) else {
             return Update { stress: trial, active: 0, plastic_dissipation: 0.0, fracture_dissipation: 0.0 };
         };
         // plastic strain increments in principal space, split MC / tensile
@@ -617,13 +680,13 @@ impl MohrCoulombRankine {
     /// Fallback when no candidate is consistent within tolerance (a round-off
     /// corner case): the candidate with non-negative multipliers and the
     /// smallest violation.
-    fn least_violating(&self, s: [f64; 3], state: &PlasticState, band: f64) -> Option<(u8, PrincipalReturn)> {
+    fn least_violating(&self, t: &Trial, state: &PlasticState) -> Option<(u8, PrincipalReturn)> {
         let mut best: Option<(f64, u8, PrincipalReturn)> = None;
         for &(set, exhausted) in &RETURN_ORDER {
             if set & RANKINE != 0 && state.crack_band == 0.0 {
                 continue;
             }
-            let Some(r) = self.principal_return(s, set, state.kappa, band, exhausted) else {
+            let Some(r) = self.return_to(t, set, exhausted) else {
                 continue;
             };
             if r.multipliers.iter().any(|&x| x < 0.0) {
