@@ -162,3 +162,29 @@ def test_a_model_without_contact_renumbers_too():
     a.step(30)
     b.step(30)
     assert np.max(np.abs(a.positions() - b.positions())) <= 1e-12
+
+
+def test_motion_renumbers_every_thousand_steps_without_growth():
+    """Besides the renumberings that growth triggers, a run with
+    renumbering on renumbers at every 1000th step (falling rock spoils the
+    order as surely as new elements: docs/renumbering.md), the same on any
+    thread count, and steps on with the physics of a run that does not
+    renumber: positions to 1e-12 m after 2 500 steps of a plate under
+    gravity and edge pressure (no contact, no fracture, no growth)."""
+    mesh = fdem.Mesh.rectangle(10.0, 4.0, 20, 8)
+    model = fdem.Model(mesh, material=fdem.Elastic(E=10e9, nu=0.25, rho=2500.0)).set_gravity(0.0, -9.81)
+    model.fix("left").pressure("top", 1e6)
+    plain = fdem.Simulation(model, threads=2)
+    runs = [fdem.Simulation(model, threads=t, renumber=0.05) for t in (1, 2)]
+    plain.step(999)
+    for sim in runs:
+        sim.step(999)
+        assert sim.renumberings == 0
+        sim.step(1)
+        assert sim.renumberings == 1
+        sim.step(1500)
+        assert sim.renumberings == 2
+    plain.step(1501)
+    one, two = runs
+    assert np.array_equal(one.positions(), two.positions())
+    assert np.max(np.abs(one.positions() - plain.positions())) <= 1e-12

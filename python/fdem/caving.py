@@ -106,7 +106,8 @@ class CavingCase:
     the added mass is reported in the summary.
     ``renumber`` is the growth of the element count by crack insertion after
     which the kernel renumbers nodes and elements along a Hilbert curve
-    (:class:`Simulation`, docs/renumbering.md): a speed setting, which
+    (and, with it set, every 1000th step as the rock moves;
+    :class:`Simulation`, docs/renumbering.md): a speed setting, which
     changes results only in the order of floating-point sums."""
 
     size: float = 1.0

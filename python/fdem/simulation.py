@@ -69,7 +69,9 @@ class Simulation:
         crack insertion has grown the element count by this fraction (e.g.
         0.05) since the last renumbering, the kernel puts its nodes and
         elements back in the order of a Hilbert curve through their current
-        positions. Ids do not change: every array and id this class reports
+        positions; with it set, the kernel also renumbers at every 1000th
+        step, since falling, mixing rock spoils the order too. Ids do not
+        change: every array and id this class reports
         or takes stays in creation order (the model's nodes and elements,
         then those crack insertion made, in the order it made them). Results
         differ from a run without it only in the order of floating-point

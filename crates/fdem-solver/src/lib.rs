@@ -37,6 +37,16 @@ mod topology;
 /// ([`Settings::energy_growth`]).
 pub const ENERGY_CHECK_INTERVAL: u64 = 50;
 
+/// Steps between the spatial renumberings that motion calls for, when
+/// renumbering is on ([`Settings::renumber`]): besides the ones crack
+/// insertion's growth triggers, the kernel renumbers at every multiple of
+/// this step count. Falling and mixing rock spoils the order as surely as
+/// new elements do: at 3.5 s of the paper-scale caving run, where few
+/// cracks open, a renumbering (60 ms on 2 threads, about four steps) made
+/// the step 16% faster, and the gain wore off over about 2 500 steps
+/// (docs/renumbering.md).
+pub const RENUMBER_INTERVAL: u64 = 1000;
+
 pub use checkpoint::{CheckpointError, FORMAT_VERSION as CHECKPOINT_FORMAT};
 pub use energy::Energies;
 pub use error::{RunError, SetupError};

@@ -69,8 +69,10 @@ pub struct Settings {
     pub mass_scaling: Option<f64>,
     /// Spatial renumbering (docs/renumbering.md): once crack insertion has
     /// grown the element count by this fraction since the last renumbering
-    /// (or the start), nodes and elements are put back in the order of a
-    /// Hilbert curve through their positions, for memory locality. Ids,
+    /// (or the start), and at every multiple of
+    /// [`RENUMBER_INTERVAL`](crate::RENUMBER_INTERVAL) steps, nodes and
+    /// elements are put back in the order of a Hilbert curve through their
+    /// positions, for memory locality. Ids,
     /// and so everything read out, stay in creation order. `None`: never.
     // written in format 4 of checkpoints (checkpoint.rs)
     #[serde(skip)]

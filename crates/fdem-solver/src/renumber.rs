@@ -219,13 +219,17 @@ fn inverse(order: &[u32]) -> Vec<u32> {
 }
 
 impl Simulation {
-    /// Renumbers once crack insertion has grown the element count by the
-    /// fraction [`Settings::renumber`](crate::Settings::renumber) since the
-    /// last renumbering; returns whether it did. The test reads saved state
-    /// only, so a restored run renumbers at the same steps.
-    pub(crate) fn renumber_if_due(&mut self) -> bool {
+    /// Renumbers, when [`Settings::renumber`](crate::Settings::renumber)
+    /// is set, once crack insertion has grown the element count by that
+    /// fraction since the last renumbering (checked after a topology change:
+    /// `changed`), and at every multiple of
+    /// [`RENUMBER_INTERVAL`](crate::RENUMBER_INTERVAL) steps; returns
+    /// whether it did. The tests read saved state only, so a restored run
+    /// renumbers at the same steps.
+    pub(crate) fn renumber_if_due(&mut self, changed: bool) -> bool {
         let Some(f) = self.settings.renumber else { return false };
-        if (self.elems.conn.len() as f64) < (1.0 + f) * self.layout.base as f64 {
+        let grown = changed && (self.elems.conn.len() as f64) >= (1.0 + f) * self.layout.base as f64;
+        if !grown && self.step % crate::RENUMBER_INTERVAL != 0 {
             return false;
         }
         self.renumber();
