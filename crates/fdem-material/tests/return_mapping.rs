@@ -257,6 +257,55 @@ fn returns_agree_with_brute_force_in_every_region() {
     assert_eq!(ambiguous, 0);
 }
 
+/// The update's own search (strength and yield functions shared by every
+/// set it tries, a set refused as soon as a multiplier is below what the
+/// consistency check accepts) picks the same set and gives the same
+/// stress, to the bit, as trying every set in [`RETURN_ORDER`] through the
+/// public `principal_return` and `is_consistent`: over 20 000 random
+/// trials on cracked points (tension and compression, softening and fully
+/// softened).
+#[test]
+fn update_picks_the_first_consistent_set_in_order() {
+    let law = palabora();
+    let mut rng = Rng(0x2545f4914f6cdd1d);
+    let geometry = Geometry { e1: [1.0, 0.0], e2: [0.4, 0.9] };
+    let mut plastic = 0;
+    for _ in 0..20_000 {
+        let scale = if rng.next() < 0.5 { 3e6 } else { 80e6 };
+        let trial = [
+            rng.range(-scale, 0.3 * scale),
+            rng.range(-scale, 0.3 * scale),
+            rng.range(-scale, 0.3 * scale),
+            rng.range(-0.3 * scale, 0.3 * scale),
+        ];
+        let band = rng.range(0.2, 3.0);
+        let kappa_max = law.tensile_strength / law.softening_modulus(band);
+        let kappa = if rng.next() < 0.3 { 0.0 } else { rng.range(0.0, 1.2 * kappa_max) };
+        let mut state = PlasticState { kappa, crack_band: band, ..Default::default() };
+        let got = law.update(trial, trial, &mut state, || geometry);
+        let sp = Spectral::of(trial);
+        let (s, order) = Order::sort(sp.a, sp.b, trial[2]);
+        let tol = law.tolerance(s);
+        let reference = RETURN_ORDER.iter().find_map(|&(set, ex)| {
+            law.principal_return(s, set, kappa, band, ex).filter(|r| law.is_consistent(r, tol)).map(|r| (set, r))
+        });
+        if got.active == 0 {
+            // elastic: no plane is violated beyond the tolerance
+            let f = law.yield_functions(s, (law.tensile_strength - law.softening_modulus(band) * kappa).max(0.0));
+            assert!(f.iter().all(|&v| v <= tol), "{trial:?}: elastic but f = {f:?}");
+            continue;
+        }
+        plastic += 1;
+        let (set, r) = reference.unwrap_or_else(|| panic!("{trial:?}: no consistent set in order"));
+        assert_eq!(got.active, set, "{trial:?} kappa {kappa} band {band}");
+        let [a, b, zz] = order.unsort(r.stress);
+        let stress = sp.compose(a, b, zz);
+        assert_eq!(got.stress.map(f64::to_bits), stress.map(f64::to_bits), "{trial:?}");
+        assert_eq!(state.kappa.to_bits(), r.kappa.to_bits());
+    }
+    assert!(plastic > 5_000, "only {plastic} plastic trials");
+}
+
 #[test]
 fn apex_is_reached_when_the_cutoff_touches_it() {
     // f_t = c cot φ puts the tension apex on the Mohr–Coulomb apex; a trial
