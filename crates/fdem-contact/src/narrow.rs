@@ -431,6 +431,17 @@ fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate
     }
 }
 
+/// The projection test of a candidate: the node projects onto the facet
+/// within the end slack (`ξ`) and lies behind it, no deeper than its depth
+/// limit (`−depth ≤ gap < 0`). Written without short-circuits, so that a
+/// row of candidates is tested without a branch each.
+#[inline(always)]
+// a NaN gap passes here, as it always has; `&` instead of `&&` throughout
+#[allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
+fn projects_inside(xi: f64, gap: f64, depth: f64) -> bool {
+    (xi >= -XI_SLACK) & (xi <= 1.0 + XI_SLACK) & !(gap >= 0.0) & !(gap < -depth)
+}
+
 /// Per contact: (rank, facet, ξ, gap, facing) of the best candidate so far.
 type Best = Option<(u8, u32, f64, f64, f64)>;
 
@@ -480,8 +491,32 @@ impl<'i, 'a> Search<'i, 'a> {
             open[k] = !matches!(self.best[k], Some((0, ..)));
         }
         if open.iter().any(|&o| o) {
-            for &f in row {
-                self.consider(f, open, states, acc);
+            if row.len() > 64 {
+                for &f in row {
+                    self.consider(f, open, states, acc);
+                }
+                return;
+            }
+            // the projection test of every candidate first, without a
+            // branch per candidate (in fractured rock which candidates pass
+            // is unpredictable, and most do not), then the rest of the test
+            // for those that pass, in row order: the same as testing them
+            // one by one
+            let frames = self.inp.frames;
+            let mut passed = 0u64;
+            for (i, &f) in row.iter().enumerate() {
+                let frame = &frames[f as usize];
+                let (xi, gap) = frame.project(self.s, frame.a);
+                passed |= u64::from(projects_inside(xi, gap, frame.depth)) << i;
+            }
+            acc.pairs += row.len() as u64;
+            while passed != 0 {
+                let i = passed.trailing_zeros() as usize;
+                passed &= passed - 1;
+                let f = row[i];
+                let frame = &frames[f as usize];
+                let (xi, gap) = frame.project(self.s, frame.a);
+                self.consider_projected(f, xi, gap, open, states);
             }
         }
     }
@@ -491,13 +526,21 @@ impl<'i, 'a> Search<'i, 'a> {
     /// far.
     #[inline]
     fn consider(&mut self, f: u32, open: [bool; 2], states: &[&mut ContactState; 2], acc: &mut ContactPartial) {
-        let inp = self.inp;
         acc.pairs += 1;
-        let frame = &inp.frames[f as usize];
+        let frame = &self.inp.frames[f as usize];
         let (xi, gap) = frame.project(self.s, frame.a);
-        if !(-XI_SLACK..=1.0 + XI_SLACK).contains(&xi) || gap >= 0.0 || gap < -frame.depth {
+        if !projects_inside(xi, gap, frame.depth) {
             return;
         }
+        self.consider_projected(f, xi, gap, open, states);
+    }
+
+    /// The rest of [`Search::consider`], for a candidate that passed the
+    /// projection test (`ξ` within the slack, `−depth ≤ gap < 0`).
+    #[inline]
+    fn consider_projected(&mut self, f: u32, xi: f64, gap: f64, open: [bool; 2], states: &[&mut ContactState; 2]) {
+        let inp = self.inp;
+        let frame = &inp.frames[f as usize];
         // Past an end of the facet (the slack that lets a node slide over a
         // vertex), at a convex corner of the other body, the facet's line
         // runs outside that body: the depth is the lesser of the two
