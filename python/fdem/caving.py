@@ -73,7 +73,7 @@ class CavingCase:
     equilateral triangles, 54 746 of them at 1.0 m; ``uniform_mesh=False``
     meshes by Delaunay refinement from the joint traces instead (78 216
     triangles down to a fifth of the size, an intact step 0.65 times as
-    long; the paper-scale run took 1 h 05 min on it, 39–59 min on the
+    long; the paper-scale run took 1 h 05 min on it, 26–59 min on the
     uniform mesh on the same machine, docs/caving.md). With 0.75 m on the refined mesh (135 672
     triangles) the run to 0.5 s gives 5 972 cracks against 4 955, 2 883
     fragments against 2 739 and the same work supplied within 5%, at 2.5×
