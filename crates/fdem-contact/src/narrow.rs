@@ -513,6 +513,9 @@ impl<'i, 'a> Search<'i, 'a> {
             while passed != 0 {
                 let i = passed.trailing_zeros() as usize;
                 passed &= passed - 1;
+                // projected again (a few flops on a cached record) rather
+                // than kept from above: a buffer per node to keep them in
+                // would cost more to fill than the few that pass
                 let f = row[i];
                 let frame = &frames[f as usize];
                 let (xi, gap) = frame.project(self.s, frame.a);

@@ -202,7 +202,8 @@ pub struct Update {
 /// What every return from one trial shares: the sorted trial principal
 /// stresses, the fracturing strain, the tensile strength and softening
 /// modulus there, and the six yield functions on the linear softening
-/// branch and past full softening (zero strength). Worked out once per
+/// branch (those past full softening, zero strength, are worked out only
+/// if a return on that branch is tried). Worked out once per
 /// update instead of once per active set tried (most plastic points try
 /// two or more). A return with a multiplier `x` such that `2G x < −reject`
 /// (Pa) is refused as soon as it is solved: the consistency check with
@@ -213,16 +214,13 @@ struct Trial {
     sy: f64,
     h: f64,
     f: [f64; 6],
-    f_exhausted: [f64; 6],
     reject: f64,
 }
 
 impl Trial {
     fn new(law: &MohrCoulombRankine, s: [f64; 3], kappa: f64, crack_band: f64, reject: f64) -> Self {
         let (sy, h) = law.strength(kappa, crack_band);
-        let f = law.yield_functions(s, sy);
-        let f_exhausted = if h == 0.0 { f } else { law.yield_functions(s, 0.0) };
-        Self { s, kappa, sy, h, f, f_exhausted, reject }
+        Self { s, kappa, sy, h, f: law.yield_functions(s, sy), reject }
     }
 }
 
@@ -447,7 +445,7 @@ impl MohrCoulombRankine {
             return None; // already exhausted: the linear branch covers it
         }
         let kappa_max = self.tensile_strength / t.h;
-        self.solve_set(t.s, active, t.kappa, 0.0, 0.0, &t.f_exhausted, t.reject)
+        self.solve_set(t.s, active, t.kappa, 0.0, 0.0, &self.yield_functions(t.s, 0.0), t.reject)
             .filter(|r| r.kappa >= kappa_max * (1.0 - 1e-12))
             .map(|mut r| {
                 r.strength = 0.0;

@@ -223,17 +223,18 @@ impl Simulation {
     /// is set, once crack insertion has grown the element count by that
     /// fraction since the last renumbering (checked after a topology change:
     /// `changed`), and at every multiple of
-    /// [`RENUMBER_INTERVAL`](crate::RENUMBER_INTERVAL) steps; returns
-    /// whether it did. The tests read saved state only, so a restored run
-    /// renumbers at the same steps.
-    pub(crate) fn renumber_if_due(&mut self, changed: bool) -> bool {
-        let Some(f) = self.settings.renumber else { return false };
+    /// [`RENUMBER_INTERVAL`](crate::RENUMBER_INTERVAL) steps, its time
+    /// counted as topology's. The tests read saved state only, so a
+    /// restored run renumbers at the same steps.
+    pub(crate) fn renumber_if_due(&mut self, changed: bool) {
+        let Some(f) = self.settings.renumber else { return };
         let grown = changed && (self.elems.conn.len() as f64) >= (1.0 + f) * self.layout.base as f64;
         if !grown && self.step % crate::RENUMBER_INTERVAL != 0 {
-            return false;
+            return;
         }
+        let clock = std::time::Instant::now();
         self.renumber();
-        true
+        self.phase_times.topology += clock.elapsed().as_secs_f64();
     }
 
     /// Renumbers now ([`Self::renumber`]), whatever the setting: e.g. after

@@ -612,20 +612,14 @@ impl Simulation {
             let changed = self.fracture_check();
             self.phase_times.fracture += clock.elapsed().as_secs_f64() - (self.phase_times.topology - topology);
             if changed {
-                let clock = Instant::now();
-                if self.renumber_if_due(true) {
-                    self.phase_times.topology += clock.elapsed().as_secs_f64();
-                }
+                self.renumber_if_due(true);
                 return Ok(()); // rebuilt forces, contact and the stable step
             }
         }
         if self.settings.fixed_dt.is_none() && self.step % self.settings.dt_interval as u64 == 0 {
             self.update_time_step_for(None, false);
         }
-        let clock = Instant::now();
-        if self.renumber_if_due(false) {
-            self.phase_times.topology += clock.elapsed().as_secs_f64();
-        }
+        self.renumber_if_due(false);
         Ok(())
     }
 
