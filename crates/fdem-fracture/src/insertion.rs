@@ -158,6 +158,7 @@ enum Cut {
 #[derive(Clone, Copy, Debug)]
 pub struct NodeFailure<'a> {
     /// Direction of σ1 (rad from x): the crack runs along `(−sin θ, cos θ)`.
+    /// Read for the candidates only.
     pub normal: &'a [f64],
     /// The node lies on an existing crack (may be shorter than the node
     /// count: missing entries are `false`).

@@ -6,7 +6,9 @@
 use fdem_contact::Bond;
 use fdem_element::kinematics::{deformation_gradient, polar_rotation, reference_inverse, signed_area};
 use fdem_element::{ReferenceShape, Vec2};
-use fdem_fracture::{nodal_failure, plan, Edits, FractureParams, NewNode, NodeFailure};
+use fdem_fracture::{
+    direction_angle, doubled_direction, nodal_failure, plan, Edits, FractureParams, NewNode, NodeFailure,
+};
 use rayon::prelude::*;
 
 use crate::loads::PressureLoad;
@@ -33,12 +35,20 @@ pub(crate) struct FractureModel {
     pub audit: InsertionAudit,
     #[serde(skip)]
     node_factor: Vec<f64>,
+    /// Per node: the crack normal as a doubled-angle vector
+    /// ([`nodal_failure`]).
     #[serde(skip)]
-    node_direction: Vec<f64>,
+    node_direction: Vec<[f64; 2]>,
+    /// Per node: the crack normal's angle (rad), worked out for the
+    /// candidates of the last check only (what [`plan`] reads).
+    #[serde(skip)]
+    node_angle: Vec<f64>,
     #[serde(skip)]
     element_factor: Vec<f64>,
+    /// Per element: the crack normal in the current configuration as a
+    /// doubled-angle unit vector ([`doubled_direction`]).
     #[serde(skip)]
-    element_direction: Vec<f64>,
+    element_direction: Vec<[f64; 2]>,
     #[serde(skip)]
     areas: Vec<f64>,
     /// Each element's failure factor at the previous check: an element whose
@@ -60,6 +70,7 @@ impl FractureModel {
             audit: InsertionAudit::default(),
             node_factor: Vec::new(),
             node_direction: Vec::new(),
+            node_angle: Vec::new(),
             element_factor: Vec::new(),
             element_direction: Vec::new(),
             areas: Vec::new(),
@@ -127,10 +138,11 @@ impl Simulation {
         let m = self.elems.conn.len();
         let n = self.nodes.x.len();
         fr.element_factor.resize(m, 0.0);
-        fr.element_direction.resize(m, 0.0);
+        fr.element_direction.resize(m, [0.0; 2]);
         fr.areas.resize(m, 0.0);
         fr.node_factor.resize(n, 0.0);
-        fr.node_direction.resize(n, 0.0);
+        fr.node_direction.resize(n, [0.0; 2]);
+        fr.node_angle.resize(n, 0.0);
         {
             let (x, conn, reference, state, material) =
                 (&self.nodes.x, &self.elems.conn, &self.elems.reference, &self.elems.state, &self.elems.material);
@@ -147,10 +159,9 @@ impl Simulation {
                     *a = signed_area(&xe);
                     *f = materials[material[e] as usize].plastic.as_ref().map_or(0.0, |l| l.failure_factor(&state[e]));
                     *d = if *f > 0.0 {
-                        let (c, s) = polar_rotation(deformation_gradient(&reference[e], &xe));
-                        state[e].direction + s.atan2(c)
+                        doubled_direction(state[e].direction, polar_rotation(deformation_gradient(&reference[e], &xe)))
                     } else {
-                        0.0
+                        [0.0; 2]
                     };
                 });
         }
@@ -186,6 +197,9 @@ impl Simulation {
         let mut edits = Edits::default();
         let mut owed: Vec<Option<(f64, f64)>> = Vec::new();
         if !candidates.is_empty() {
+            for &p in &candidates {
+                fr.node_angle[p as usize] = direction_angle(fr.node_direction[p as usize]);
+            }
             // ties by id: the order does not depend on the layout
             let id = |p: u32| self.layout.node_id(p);
             candidates.sort_by(|&a, &b| {
@@ -197,7 +211,7 @@ impl Simulation {
                 &self.node_elems,
                 &self.nodes.x,
                 &candidates,
-                &NodeFailure { normal: &fr.node_direction, cracked: &fr.cracked },
+                &NodeFailure { normal: &fr.node_angle, cracked: &fr.cracked },
                 &fr.params,
             );
             // what each new crack still owes, from the mesh before the edits
