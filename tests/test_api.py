@@ -92,6 +92,37 @@ def test_output_series_opens_and_has_the_documented_fields(tmp_path):
         fdem.Simulation(model).run(until=1e-4, output=tmp_path, name="col", progress=False)
 
 
+def test_stops_between_output_times_leave_no_frame_when_asked(tmp_path):
+    """A driver that stops between output times (``final_frame=False``)
+    gets frames at the output times only, and every stop in the energy
+    history and the checkpoint; the last run's end is a frame by default."""
+    mesh = fdem.Mesh.rectangle(2.0, 1.0, 6, 3)
+    model = fdem.Model(mesh, material=ROCK).set_gravity(0, -9.81).fix("bottom")
+    sim = fdem.Simulation(model, mass_damping=100.0)
+    ckpt = tmp_path / "col.ckpt"
+    for k in range(1, 8):
+        sim.run(
+            until=k * 2.5e-4,
+            output_every=5e-4,
+            output=tmp_path,
+            name="col",
+            progress=False,
+            energy_tolerance=0.05,
+            final_frame=k == 7,
+        )
+        # the checkpoint is this stop's state
+        assert fdem.Simulation.from_checkpoint(ckpt, model).steps == sim.steps
+    times = [float(d.get("timestep")) for d in ET.parse(tmp_path / "col.pvd").getroot().iter("DataSet")]
+    # frames at 0, 5e-4, 1e-3, 1.5e-3 (each at the first step past it) and
+    # at the end (1.75e-3): not at the stops in between
+    assert len(times) == 5 and times[0] == 0.0 and times[-1] == pytest.approx(sim.time, rel=1e-8)
+    assert all(abs(t - k * 5e-4) < 2 * sim.time_step for k, t in enumerate(times[:-1]))
+    energy = np.genfromtxt(tmp_path / "col_energy.csv", delimiter=",", names=True)
+    # one row per frame and per stop: 0 and the seven stops (three of which
+    # are at or just past output times, so both)
+    assert len(energy) == 8 and energy["time"][-1] == sim.time
+
+
 def test_run_continues_a_series_and_stops_at_until():
     mesh = fdem.Mesh.rectangle(1.0, 1.0, 2, 2)
     sim = fdem.Simulation(fdem.Model(mesh, material=ROCK).set_gravity(0, -9.81))

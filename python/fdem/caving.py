@@ -382,6 +382,8 @@ def run_caving(
     # (and at frames, Ctrl-C and failures), with the bookkeeping of the last
     # sample before it; a resume at the end of a stretch takes the sample
     # the interruption left untaken, from the same state.
+    # Frames every ``output_every`` and at the end; the stops between (for
+    # the probe table) go into the energy history and the checkpoint only.
     def advance(until: float, overwrite: bool) -> None:
         sim.run(
             until=until,
@@ -391,6 +393,7 @@ def run_caving(
             overwrite=overwrite,
             progress=progress and until > sim.time,
             checkpoint=ckpt,
+            final_frame=until >= case.until - 1e-12,
         )
 
     try:

@@ -191,6 +191,11 @@ class VtuSeries:
         self._append_energy(sim, sim.energies() if energies is None else energies)
         return self.directory / fname
 
+    def record_energy(self, sim: Simulation, energies: dict[str, float] | None = None) -> None:
+        """Adds the current state to the energy history only, without a
+        frame (``energies``: ``sim.energies()``, if the caller has it)."""
+        self._append_energy(sim, sim.energies() if energies is None else energies)
+
     def _write_index(self) -> None:
         lines = [
             '<?xml version="1.0"?>',
