@@ -35,7 +35,7 @@
 
 use crate::dense::{solve, MAX};
 use crate::elastic::Elastic;
-use crate::principal::{Order, Spectral};
+use crate::principal::{DirectionCode, Order, Spectral};
 use crate::{check, ParameterError};
 
 /// How the crack-band width `h_c` of an element is measured.
@@ -147,12 +147,28 @@ pub struct PlasticState {
     /// Crack-band width `h_c` (m); zero until the point first reaches `f_t`.
     pub crack_band: f64,
     /// Direction of σ1 in the co-rotational frame at the last tensile
-    /// plastic step (rad from x): the rotating crack's normal.
-    pub direction: f64,
+    /// plastic step, the rotating crack's normal, as a
+    /// [`DirectionCode`](crate::principal::DirectionCode) (0: the x axis):
+    /// see [`PlasticState::crack_angle`].
+    pub direction_code: f64,
     /// Plastic strain `[xx, yy, zz, xy]` (co-rotational, tensor shear).
     pub plastic_strain: [f64; 4],
     /// Accumulated equivalent plastic strain `Σ √(2/3 Δεᵖ:Δεᵖ)`.
     pub equivalent_plastic_strain: f64,
+}
+
+impl PlasticState {
+    /// Direction of the crack normal (rad from x, co-rotational frame, in
+    /// `[−π/2, π/2]`).
+    pub fn crack_angle(&self) -> f64 {
+        DirectionCode::angle(self.direction_code)
+    }
+
+    /// The crack normal as the doubled-angle unit vector `(cos 2θ, sin 2θ)`
+    /// (co-rotational frame), without a trigonometric call.
+    pub fn crack_doubled(&self) -> [f64; 2] {
+        DirectionCode::doubled(self.direction_code)
+    }
 }
 
 /// The shape an element gives the law for its crack band: its two edge
@@ -351,7 +367,8 @@ impl MohrCoulombRankine {
         if state.crack_band <= 0.0 {
             return;
         }
-        let (before, after) = (self.band_width(parent, state.direction), self.band_width(piece, state.direction));
+        let angle = state.crack_angle();
+        let (before, after) = (self.band_width(parent, angle), self.band_width(piece, angle));
         if before > 0.0 && after > 0.0 {
             let ratio = after / before;
             state.kappa /= ratio;
@@ -670,7 +687,7 @@ impl MohrCoulombRankine {
         state.equivalent_plastic_strain += (2.0 / 3.0 * sq).sqrt();
         if active & RANKINE != 0 {
             state.kappa = r.kappa;
-            state.direction = sp.angle();
+            state.direction_code = sp.direction_code();
         }
         Update { stress, active, plastic_dissipation: work(de_mc), fracture_dissipation: work(de_t) }
     }

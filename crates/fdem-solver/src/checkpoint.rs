@@ -52,8 +52,13 @@ pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
 /// The checkpoint format this build writes; it reads this one and older.
 /// Format 2 appends [`Format2`] (mass scaling) to the format-1 state,
 /// format 3 then [`Format3`] (the second contacts of corner nodes),
-/// format 4 then [`Format4`] (spatial renumbering).
-pub const FORMAT_VERSION: u32 = 4;
+/// format 4 then [`Format4`] (spatial renumbering). Format 5 keeps each
+/// material point's crack direction as a
+/// [`DirectionCode`](fdem_material::principal::DirectionCode) where formats
+/// 1–4 kept its angle (rad): an older file's angles are converted as it is
+/// read, so its run continues with that direction (not bit for bit the run
+/// an older build would continue: its arithmetic differs in the last bits).
+pub const FORMAT_VERSION: u32 = 5;
 const HEADER: usize = 40;
 
 /// Why a checkpoint could not be written or read.
@@ -362,6 +367,11 @@ impl Simulation {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
         }
         corners.apply(&mut owned);
+        if version < 5 {
+            for st in &mut owned.elems.state {
+                st.direction_code = fdem_material::principal::DirectionCode::of_angle(st.direction_code);
+            }
+        }
         check_consistent(&owned)?;
         if !renumbering.layout.is_consistent(owned.nodes.x.len(), owned.elems.conn.len()) {
             return Err(CheckpointError::Invalid("the node and element numbering is not a permutation".into()));

@@ -159,7 +159,10 @@ impl Simulation {
                     *a = signed_area(&xe);
                     *f = materials[material[e] as usize].plastic.as_ref().map_or(0.0, |l| l.failure_factor(&state[e]));
                     *d = if *f > 0.0 {
-                        doubled_direction(state[e].direction, polar_rotation(deformation_gradient(&reference[e], &xe)))
+                        doubled_direction(
+                            state[e].crack_doubled(),
+                            polar_rotation(deformation_gradient(&reference[e], &xe)),
+                        )
                     } else {
                         [0.0; 2]
                     };

@@ -270,7 +270,7 @@ impl Simulation {
         (0..self.n_elements())
             .map(|e| {
                 let (c, s) = self.rotation(e);
-                let a = self.elems.state[e].direction + s.atan2(c);
+                let a = self.elems.state[e].crack_angle() + s.atan2(c);
                 // a direction, not an orientation: keep it in (−π/2, π/2]
                 let half = std::f64::consts::FRAC_PI_2;
                 if a > half {

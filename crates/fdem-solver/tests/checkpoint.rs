@@ -4,7 +4,7 @@
 mod common;
 use common::square;
 use fdem_solver::{
-    CheckpointError, Constraint, ContactSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Simulation,
+    CheckpointError, Constraint, ContactSpec, CrackBand, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Simulation,
     CHECKPOINT_FORMAT,
 };
 
@@ -200,4 +200,42 @@ fn a_format_2_file_with_contact_reads_without_corner_contacts() {
     a.step(20).unwrap();
     b.step(20).unwrap();
     assert!(a.checkpoint_bytes(b"") == b.checkpoint_bytes(b""));
+}
+
+#[test]
+fn a_format_4_file_keeps_its_crack_directions() {
+    // formats 1–4 kept each point's crack direction as an angle (rad),
+    // format 5 as a direction code: a format-4 file must read back with the
+    // angles it holds. The plate stretched and sheared from its top until
+    // its points soften in tension, each along its own direction.
+    let n = 8;
+    let mut spec = plate(n);
+    spec.materials[0].law = LawSpec::MohrCoulombRankine {
+        cohesion: 1e6,
+        friction: 0.5,
+        dilation: 0.1,
+        tensile_strength: 1e5,
+        fracture_energy: 10.0,
+        crack_band: CrackBand::Oliver,
+    };
+    let top = (n * (n + 1)) as u32;
+    for i in top..=top + n as u32 {
+        let value = [0.3 * (i - top) as f64 / n as f64, 0.5];
+        spec.constraints.push(Constraint { node: i, fixed: [true, true], value, amplitude: None });
+    }
+    let mut a = Simulation::new(spec, 1).unwrap();
+    a.step(300).unwrap();
+    let codes: Vec<f64> = a.plastic_states().iter().map(|s| s.direction_code).collect();
+    let cracked = a.failure_factors().iter().filter(|&&f| f > 0.0).count();
+    assert!(cracked > 10, "only {cracked} points softened");
+    assert!(codes.iter().filter(|&&c| c != 0.0).count() >= cracked);
+    // the same bytes marked as format 4: each code is read as an angle
+    let v5 = a.checkpoint_bytes(b"");
+    let v4 = downgrade(&v5, 4, 0);
+    let (b, _) = Simulation::from_checkpoint_bytes(&v4, 1).unwrap();
+    let pi = std::f64::consts::PI;
+    for (e, s) in b.plastic_states().iter().enumerate() {
+        let d = (s.crack_angle() - codes[e]).rem_euclid(pi);
+        assert!(d.min(pi - d) < 1e-15, "element {e}: angle {} for {}", s.crack_angle(), codes[e]);
+    }
 }
