@@ -625,17 +625,22 @@ impl MohrCoulombRankine {
         state: &mut PlasticState,
         geometry: impl FnOnce() -> Geometry,
     ) -> Update {
+        // before the first crack κ = 0 and the strength is f_t whatever the band
+        let band = if state.crack_band > 0.0 { state.crack_band } else { 1.0 };
+        let sy = self.strength(state.kappa, band).0;
+        let elastic = Update { stress: trial, active: 0, plastic_dissipation: 0.0, fracture_dissipation: 0.0 };
+        if self.surely_elastic(trial, sy) {
+            return elastic;
+        }
         let sp = Spectral::of(trial);
         let (s, order) = Order::sort(sp.a, sp.b, trial[2]);
         let tol = self.tolerance(s);
-        // before the first crack κ = 0 and the strength is f_t whatever the band
-        let band = if state.crack_band > 0.0 { state.crack_band } else { 1.0 };
         // σ1 ≥ σ2 ≥ σ3 makes the main plane and the σ1 plane the largest of
         // their families: the point is elastic if both are inside
         let main = s[0] * (1.0 + self.sin_phi) - s[2] * (1.0 - self.sin_phi) - 2.0 * self.cohesion * self.cos_phi;
-        let tensile = s[0] - self.strength(state.kappa, band).0;
+        let tensile = s[0] - sy;
         if main <= tol && tensile <= tol {
-            return Update { stress: trial, active: 0, plastic_dissipation: 0.0, fracture_dissipation: 0.0 };
+            return elastic;
         }
         if state.crack_band == 0.0 && tensile > tol {
             let geometry = geometry();
@@ -690,6 +695,31 @@ impl MohrCoulombRankine {
             state.direction_code = sp.direction_code();
         }
         Update { stress, active, plastic_dissipation: work(de_mc), fracture_dissipation: work(de_t) }
+    }
+
+    /// Whether trial `[xx, yy, zz, xy]` is inside both the main plane and
+    /// the cut-off at strength `sy` by the test of [`Self::update`], shown
+    /// without the square root of the principal stresses: with the in-plane
+    /// radius bounded by `r ≤ |σ_xx − σ_yy|/2 + |σ_xy|` (padded by 10⁻¹⁵
+    /// against round-off), upper and lower bounds of σ1 and σ3 put into the
+    /// same expressions (floating-point operations are monotone) give upper
+    /// bounds of the main-plane and cut-off functions, and the tolerance is
+    /// at least its value at zero stress. `false` says nothing: the full
+    /// test decides. Most points of a loaded rock mass are well inside and
+    /// pass here (at 3.5 s of the paper-scale caving run, two thirds of the
+    /// updates are elastic).
+    #[inline]
+    fn surely_elastic(&self, trial: [f64; 4], sy: f64) -> bool {
+        let mean = 0.5 * (trial[0] + trial[1]);
+        let half = 0.5 * (trial[0] - trial[1]);
+        let r_up = (half.abs() + trial[3].abs()) * (1.0 + 1e-15);
+        let (a_up, b_lo, zz) = (mean + r_up, mean - r_up, trial[2]);
+        // written with comparisons, not `max`/`min`, so that a NaN fails
+        let s1_up = if zz >= a_up { zz } else { a_up };
+        let s3_lo = if zz <= b_lo { zz } else { b_lo };
+        let main_up = s1_up * (1.0 + self.sin_phi) - s3_lo * (1.0 - self.sin_phi) - 2.0 * self.cohesion * self.cos_phi;
+        let tol_lo = self.tolerance([0.0; 3]);
+        main_up <= tol_lo && s1_up - sy <= tol_lo
     }
 
     /// Fallback when no candidate is consistent within tolerance (a round-off

@@ -306,6 +306,62 @@ fn update_picks_the_first_consistent_set_in_order() {
     assert!(plastic > 5_000, "only {plastic} plastic trials");
 }
 
+/// The update's quick elastic test (bounds on the principal stresses
+/// without the square root) never calls a point elastic that the full test
+/// (principal stresses, tolerance) calls plastic, nor the reverse: over
+/// trials put within a relative 1e-18 to 1e-6 of the Mohr–Coulomb main
+/// plane and of the tension cut-off, on and off the principal axes (no
+/// shear, no in-plane deviator), where the bounds are tightest.
+#[test]
+fn quick_elastic_test_agrees_with_the_full_one_at_the_yield_surface() {
+    let law = palabora();
+    let mut rng = Rng(0x9e3779b97f4a7c15);
+    let geometry = Geometry { e1: [1.0, 0.0], e2: [0.4, 0.9] };
+    let (sp, k) = (law.friction.sin(), 2.0 * law.cohesion * law.friction.cos());
+    let (mut elastic, mut plastic) = (0, 0);
+    for i in 0..40_000 {
+        let band = rng.range(0.2, 3.0);
+        let kappa_max = law.tensile_strength / law.softening_modulus(band);
+        let kappa = if rng.next() < 0.3 { 0.0 } else { rng.range(0.0, 1.2 * kappa_max) };
+        let sy = (law.tensile_strength - law.softening_modulus(band) * kappa).max(0.0);
+        // principal values: σ3 below, σ1 on the main plane or the cut-off
+        let s3 = rng.range(-60e6, sy);
+        let on_main = (k + s3 * (1.0 - sp)) / (1.0 + sp);
+        let s1 = if rng.next() < 0.5 { on_main.min(sy) } else { sy.max(s3) };
+        let nudge = (if rng.next() < 0.5 { -1.0 } else { 1.0 }) * 10f64.powf(rng.range(-18.0, -6.0));
+        let s1 = s1 * (1.0 + nudge) + nudge * 1e6;
+        let s2 = rng.range(s3, s1.max(s3));
+        // which two are in plane, at which angle
+        let (a, b, zz) = match i % 3 {
+            0 => (s1, s3, s2),
+            1 => (s1, s2, s3),
+            _ => (s2, s3, s1),
+        };
+        let th = match (i / 3) % 4 {
+            0 => 0.0,
+            1 => std::f64::consts::FRAC_PI_2,
+            _ => rng.range(-1.6, 1.6),
+        };
+        let (m, h) = (0.5 * (a + b), 0.5 * (a - b));
+        let trial = [m + h * (2.0 * th).cos(), m - h * (2.0 * th).cos(), zz, h * (2.0 * th).sin()];
+        // the full test, as `update` writes it
+        let spec = Spectral::of(trial);
+        let (s, _) = Order::sort(spec.a, spec.b, trial[2]);
+        let tol = law.tolerance(s);
+        let main = s[0] * (1.0 + sp) - s[2] * (1.0 - sp) - k;
+        let full_elastic = main <= tol && s[0] - sy <= tol;
+        let mut state = PlasticState { kappa, crack_band: band, ..Default::default() };
+        let got = law.update(trial, trial, &mut state, || geometry);
+        assert_eq!(got.active == 0, full_elastic, "{trial:?} kappa {kappa} band {band}: main {main} tol {tol}");
+        if full_elastic {
+            elastic += 1;
+        } else {
+            plastic += 1;
+        }
+    }
+    assert!(elastic > 5_000 && plastic > 5_000, "{elastic} elastic, {plastic} plastic");
+}
+
 #[test]
 fn apex_is_reached_when_the_cutoff_touches_it() {
     // f_t = c cot φ puts the tension apex on the Mohr–Coulomb apex; a trial
