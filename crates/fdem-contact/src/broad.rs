@@ -54,7 +54,20 @@ pub struct BroadPhase {
     keys: Vec<u32>,
     /// Facet index of each key in the current surface, or `NONE`.
     facet_of_key: Vec<u32>,
+    /// A bound (m) on how far any node has moved since the last scan of
+    /// the boundary nodes' positions ([`BroadPhase::note_motion`]).
+    moved: f64,
+    /// How far (m) every boundary node could still move after that scan
+    /// without any having moved more than half the margin since the build:
+    /// while `moved` stays below it, [`update`](Self::update) need not scan.
+    /// Not saved: a restored run scans at its first update.
+    slack: f64,
 }
+
+/// Relative and absolute (m) allowances for round-off in the motion bound:
+/// the positions' own updates and the distances computed from them.
+const SLACK_REL: f64 = 1e-9;
+const SLACK_ABS: f64 = 1e-9;
 
 impl BroadPhase {
     /// An empty broad phase with box enlargement `margin` (m); the first
@@ -74,6 +87,8 @@ impl BroadPhase {
             changed: false,
             keys: Vec::new(),
             facet_of_key: Vec::new(),
+            moved: 0.0,
+            slack: 0.0,
         }
     }
 
@@ -105,11 +120,48 @@ impl BroadPhase {
         })
     }
 
+    /// Notes that no node has moved more than `distance` (m) in a step:
+    /// the time loop passes `Δt max|v|` of each step's node update (an
+    /// infinite or NaN distance forces the next scan).
+    pub fn note_motion(&mut self, distance: f64) {
+        self.moved = if distance.is_finite() { self.moved + distance * (1.0 + SLACK_REL) + 1e-12 } else { f64::INFINITY };
+    }
+
     /// Rebuilds (or refits) the tree and the candidate list if needed;
-    /// returns whether it did.
+    /// returns whether it did. The same decision as [`needs_update`]
+    /// (Self::needs_update), without its scan of every boundary node while
+    /// the motion noted since the last scan ([`note_motion`]
+    /// (Self::note_motion)) cannot have taken any node past half the
+    /// margin: the scan took a tenth of a late step's broad phase at the
+    /// paper's scale, where the list is rebuilt every hundred steps or so.
     pub fn update(&mut self, surface: &Surface, x: &[Vec2]) -> bool {
-        if !self.needs_update(surface, x) {
-            return false;
+        let stale = self.fresh || self.changed || self.built_at.len() != surface.nodes.len();
+        if !stale {
+            if self.moved < self.slack {
+                return false;
+            }
+            // the farthest any boundary node has gone since the build
+            let far = surface
+                .nodes
+                .par_iter()
+                .zip(self.built_at.par_iter())
+                .with_min_len(CHUNK)
+                .map(|(&n, b)| {
+                    let p = x[n as usize];
+                    let (dx, dy) = (p[0] - b[0], p[1] - b[1]);
+                    let d2 = dx * dx + dy * dy;
+                    if d2.is_nan() {
+                        f64::INFINITY
+                    } else {
+                        d2
+                    }
+                })
+                .reduce(|| 0.0, f64::max);
+            if far <= 0.25 * self.margin * self.margin {
+                self.moved = 0.0;
+                self.slack = 0.5 * self.margin * (1.0 - SLACK_REL) - far.sqrt() * (1.0 + SLACK_REL) - SLACK_ABS;
+                return false;
+            }
         }
         self.build(surface, x);
         true
@@ -173,6 +225,9 @@ impl BroadPhase {
         self.builds += 1;
         self.built_at.clear();
         self.built_at.extend(surface.nodes.iter().map(|&n| x[n as usize]));
+        // every node is where it was built
+        self.moved = 0.0;
+        self.slack = 0.5 * self.margin * (1.0 - SLACK_REL) - SLACK_ABS;
         // query every boundary node, chunk by chunk, into reused buffers
         let n_chunks = surface.nodes.len().div_ceil(CHUNK);
         self.chunk_lists.resize_with(n_chunks, Vec::new);
@@ -239,6 +294,8 @@ impl BroadPhase {
             self.changed = true;
             return;
         }
+        // the kept nodes keep their build positions: scan at the next update
+        self.slack = 0.0;
         let m = margin;
         let max_key = new.facets.last().map_or(0, |f| f.key as usize + 1);
         // old facet → new facet where it is kept (same key, same nodes),
@@ -482,6 +539,8 @@ impl<'de> Deserialize<'de> for BroadPhase {
             changed: s.changed,
             keys: s.keys,
             facet_of_key: s.facet_of_key,
+            moved: 0.0,
+            slack: 0.0,
         })
     }
 }
@@ -534,7 +593,47 @@ mod tests {
         moved[5][0] += 0.049;
         assert!(!bp.needs_update(&s, &moved));
         moved[5][0] += 0.002;
+        // (without the motion noted, the update trusts that nothing moved)
+        assert!(!bp.update(&s, &moved));
+        bp.note_motion(0.051);
         assert!(bp.update(&s, &moved));
+    }
+
+    /// `update` decides as `needs_update` would, step after step, whether
+    /// it scans or skips the scan on the motion noted: nodes drift by
+    /// random steps up to `a` (noted as `a √2`), some fast, some at rest,
+    /// through many rebuilds and a carry-over.
+    #[test]
+    fn update_skips_its_scan_only_when_no_node_can_be_past_half_the_margin() {
+        let margin = 0.1;
+        let (facets, keys, x0, apex) = row_of_squares(4);
+        let s = Surface::with_keys(x0.len(), &facets, &x0, &apex, &keys);
+        let mut bp = BroadPhase::new(margin);
+        let mut x = x0.clone();
+        assert!(bp.update(&s, &x));
+        let (mut seed, mut builds, mut skipped) = (11u64, 0, 0);
+        for step in 0..4000 {
+            // a steady drift of node 5, jiggles of everything, quiet spells
+            let a = if (step / 500) % 2 == 0 { 2e-3 } else { 1e-4 };
+            let mut next = jiggle(&x, a, &mut seed);
+            next[5][0] = x[5][0] + 0.8 * a;
+            next[5][1] = x[5][1];
+            x = next;
+            bp.note_motion(a * 2f64.sqrt());
+            if step == 2500 {
+                // a topology change carried over: the next update scans
+                bp.carry_over(&s, &s, &x, margin);
+            }
+            let expected = bp.needs_update(&s, &x);
+            let slack_before = bp.moved < bp.slack;
+            assert_eq!(bp.update(&s, &x), expected, "step {step}");
+            builds += usize::from(expected);
+            skipped += usize::from(slack_before && !expected);
+        }
+        assert!(builds > 20 && skipped > 2000, "{builds} builds, {skipped} scans skipped");
+        // an unbounded step forces the scan
+        bp.note_motion(f64::NAN);
+        assert!(bp.moved >= bp.slack);
     }
 
     /// Facets with laws, their keys, node positions, facet apexes.

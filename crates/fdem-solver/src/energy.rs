@@ -135,6 +135,8 @@ pub(crate) struct NodePartial {
     pub contact_damping: f64,
     pub support: f64,
     pub damping: f64,
+    /// Largest `|v^{n+½}|²` of the chunk (m²/s²; NaN if any is).
+    pub max_speed2: f64,
     pub bad_node: Option<(u32, &'static str)>,
 }
 

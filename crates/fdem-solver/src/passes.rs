@@ -134,6 +134,10 @@ pub(crate) fn node_pass(inp: &NodeInputs<'_>, x: &mut [Vec2], v: &mut [Vec2], pa
                 p[0] += inp.dt * v_new[0];
                 p[1] += inp.dt * v_new[1];
                 vc[j] = v_new;
+                let speed2 = v_new[0] * v_new[0] + v_new[1] * v_new[1];
+                if !(speed2 <= acc.max_speed2) {
+                    acc.max_speed2 = speed2;
+                }
                 if acc.bad_node.is_none() {
                     if !(v_new[0].is_finite() && v_new[1].is_finite()) {
                         acc.bad_node = Some((i as u32, "velocity"));

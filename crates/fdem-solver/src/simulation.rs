@@ -533,7 +533,12 @@ impl Simulation {
         self.step += 1;
         self.dt_prev = dt;
         let mut bad_node = None;
+        let mut max_speed2 = 0.0f64;
         for p in &self.node_partials {
+            // a NaN is kept (the run stops below at the bad node anyway)
+            if !(p.max_speed2 <= max_speed2) {
+                max_speed2 = p.max_speed2;
+            }
             self.energies.external_work += p.external;
             self.energies.contact_work += p.contact;
             self.energies.contact_damping -= p.contact_damping;
@@ -544,6 +549,12 @@ impl Simulation {
         if let Some((node, quantity)) = bad_node {
             let node = self.layout.node_id(node);
             return Err(RunError::NonFinite { node, quantity, step: self.step, time: self.time });
+        }
+        // how far the step can have moved any node: lets the broad phase
+        // skip its scan of the boundary nodes while no node can be near
+        // half its margin
+        if let Some(c) = self.contact.as_mut() {
+            c.broad.note_motion(dt * max_speed2.sqrt());
         }
         // The element pass and the contact evaluation read the same
         // positions and velocities and write disjoint arrays, so they may
