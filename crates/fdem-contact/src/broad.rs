@@ -124,16 +124,17 @@ impl BroadPhase {
     /// the time loop passes `Δt max|v|` of each step's node update (an
     /// infinite or NaN distance forces the next scan).
     pub fn note_motion(&mut self, distance: f64) {
-        self.moved = if distance.is_finite() { self.moved + distance * (1.0 + SLACK_REL) + 1e-12 } else { f64::INFINITY };
+        self.moved =
+            if distance.is_finite() { self.moved + distance * (1.0 + SLACK_REL) + 1e-12 } else { f64::INFINITY };
     }
 
     /// Rebuilds (or refits) the tree and the candidate list if needed;
-    /// returns whether it did. The same decision as [`needs_update`]
-    /// (Self::needs_update), without its scan of every boundary node while
-    /// the motion noted since the last scan ([`note_motion`]
-    /// (Self::note_motion)) cannot have taken any node past half the
-    /// margin: the scan took a tenth of a late step's broad phase at the
-    /// paper's scale, where the list is rebuilt every hundred steps or so.
+    /// returns whether it did. The same decision as
+    /// [`needs_update`](Self::needs_update), without its scan of every
+    /// boundary node while the motion noted since the last scan
+    /// ([`note_motion`](Self::note_motion)) cannot have taken any node past
+    /// half the margin: at the paper's scale the list is rebuilt about
+    /// every hundred late steps, and the scan ran at every one of them.
     pub fn update(&mut self, surface: &Surface, x: &[Vec2]) -> bool {
         let stale = self.fresh || self.changed || self.built_at.len() != surface.nodes.len();
         if !stale {

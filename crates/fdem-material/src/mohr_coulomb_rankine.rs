@@ -714,12 +714,15 @@ impl MohrCoulombRankine {
         let half = 0.5 * (trial[0] - trial[1]);
         let r_up = (half.abs() + trial[3].abs()) * (1.0 + 1e-15);
         let (a_up, b_lo, zz) = (mean + r_up, mean - r_up, trial[2]);
-        // written with comparisons, not `max`/`min`, so that a NaN fails
+        // written with comparisons, not `max`/`min`, so that a NaN in the
+        // in-plane part carries into `main_up` and fails the test; a NaN
+        // `σ_zz` fails it explicitly (it would not reach the in-plane
+        // forces, so the full test must see it)
         let s1_up = if zz >= a_up { zz } else { a_up };
         let s3_lo = if zz <= b_lo { zz } else { b_lo };
         let main_up = s1_up * (1.0 + self.sin_phi) - s3_lo * (1.0 - self.sin_phi) - 2.0 * self.cohesion * self.cos_phi;
         let tol_lo = self.tolerance([0.0; 3]);
-        main_up <= tol_lo && s1_up - sy <= tol_lo
+        main_up <= tol_lo && s1_up - sy <= tol_lo && !zz.is_nan()
     }
 
     /// Fallback when no candidate is consistent within tolerance (a round-off

@@ -360,6 +360,14 @@ fn quick_elastic_test_agrees_with_the_full_one_at_the_yield_surface() {
         }
     }
     assert!(elastic > 5_000 && plastic > 5_000, "{elastic} elastic, {plastic} plastic");
+    // a NaN in any component is not masked: it stays in the stress
+    for k in 0..4 {
+        let mut trial = [-5e6, -8e6, -3e6, 1e6];
+        trial[k] = f64::NAN;
+        let mut state = PlasticState::default();
+        let got = law.update(trial, trial, &mut state, || geometry);
+        assert!(got.stress.iter().any(|v| v.is_nan()), "component {k}: {:?}", got.stress);
+    }
 }
 
 #[test]

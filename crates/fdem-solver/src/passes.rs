@@ -135,7 +135,8 @@ pub(crate) fn node_pass(inp: &NodeInputs<'_>, x: &mut [Vec2], v: &mut [Vec2], pa
                 p[1] += inp.dt * v_new[1];
                 vc[j] = v_new;
                 let speed2 = v_new[0] * v_new[0] + v_new[1] * v_new[1];
-                if !(speed2 <= acc.max_speed2) {
+                // a NaN is kept (`max` would drop it)
+                if speed2 > acc.max_speed2 || speed2.is_nan() {
                     acc.max_speed2 = speed2;
                 }
                 if acc.bad_node.is_none() {

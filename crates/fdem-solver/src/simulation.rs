@@ -536,7 +536,7 @@ impl Simulation {
         let mut max_speed2 = 0.0f64;
         for p in &self.node_partials {
             // a NaN is kept (the run stops below at the bad node anyway)
-            if !(p.max_speed2 <= max_speed2) {
+            if p.max_speed2 > max_speed2 || p.max_speed2.is_nan() {
                 max_speed2 = p.max_speed2;
             }
             self.energies.external_work += p.external;
