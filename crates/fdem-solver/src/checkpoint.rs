@@ -141,6 +141,7 @@ macro_rules! saved_state {
                 phase_times: PhaseTimes::default(),
                 node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],
                 elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
+                contact_wr: Vec::new(),
                 layout: Layout::default(),
                 pool,
             };

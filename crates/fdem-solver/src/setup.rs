@@ -286,6 +286,7 @@ impl Simulation {
             held_seen: 0.0,
             node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],
             elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
+            contact_wr: Vec::new(),
             layout: crate::renumber::Layout::new(m),
             pool: Arc::new(pool),
         };

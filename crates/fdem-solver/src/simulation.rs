@@ -161,6 +161,10 @@ pub struct Simulation {
     pub(crate) held_seen: f64,
     pub(crate) node_partials: Vec<NodePartial>,
     pub(crate) elem_partials: Vec<ElementPartial>,
+    /// Per boundary node: its frequency with its contact springs and the
+    /// dashpot's factor ([`Simulation::contact_node_frequency`]) at the
+    /// last stable-step evaluation (scratch; sized by it).
+    pub(crate) contact_wr: Vec<Option<(f64, f64)>>,
     /// Internal index ↔ id of nodes and elements (spatial renumbering).
     pub(crate) layout: crate::renumber::Layout,
     /// Worker threads; every public entry point that steps runs inside it
@@ -298,7 +302,13 @@ impl Simulation {
             if self.settings.safety * crit < target {
                 let changed = self.scale_masses(target / self.settings.safety);
                 if !changed.is_empty() {
-                    crit = self.critical_step(Some(&changed));
+                    // only the changed elements' frequencies and their
+                    // nodes' masses moved: their nodes' contact
+                    // frequencies are worked out again, the others kept
+                    let mut moved: Vec<u32> = changed.iter().flat_map(|&e| self.elems.conn[e as usize]).collect();
+                    moved.sort_unstable();
+                    moved.dedup();
+                    crit = self.critical_step_of(Some(&changed), Some(&moved));
                 }
             }
         }
@@ -308,10 +318,21 @@ impl Simulation {
     }
 
     /// The critical step before the safety factor (s), updating the stored
-    /// element frequencies (all, or the listed elements').
+    /// element frequencies (all, or the listed elements') and every
+    /// boundary node's contact frequency.
     fn critical_step(&mut self, touched: Option<&[u32]>) -> f64 {
+        self.critical_step_of(touched, None)
+    }
+
+    /// [`Self::critical_step`], re-evaluating the contact frequencies of
+    /// the boundary nodes among `nodes` (mesh ids) only, when given: those
+    /// whose mass or elements' frequencies changed since the last
+    /// evaluation (the others' are exactly what they were; the minimum is
+    /// the same as over a full evaluation). Mass scaling at an insertion
+    /// used to evaluate every boundary node three times.
+    fn critical_step_of(&mut self, touched: Option<&[u32]>, nodes: Option<&[u32]>) -> f64 {
         let pool = Arc::clone(&self.pool);
-        pool.install(|| {
+        let element_crit = pool.install(|| {
             let Simulation { nodes, elems, omega, .. } = self;
             let inp = ElementInputs {
                 x: &nodes.x,
@@ -325,18 +346,48 @@ impl Simulation {
                 dt: 0.0,
                 plastic: !self.elastic_stage,
             };
-            let mut crit = match touched {
+            match touched {
                 None => passes::element_frequencies(&inp, &elems.mass_scale, omega),
                 Some(list) => {
                     passes::element_frequencies_of(&inp, &elems.mass_scale, list, omega);
                     passes::critical_from_frequencies(omega, self.settings.stiffness_damping)
                 }
-            };
-            if let Some(contact) = &self.contact {
+            }
+        });
+        // the contact nodes' frequencies read the elements' just updated
+        if let Some(contact) = &self.contact {
+            let nb = self.surface.nodes.len();
+            let mut wr = std::mem::take(&mut self.contact_wr);
+            match nodes {
+                Some(list) if wr.len() == nb => {
+                    for &v in list {
+                        let b = self.surface.index_of[v as usize];
+                        if b != crate::NONE {
+                            wr[b as usize] = self.contact_node_frequency(contact, b as usize);
+                        }
+                    }
+                }
+                _ => {
+                    wr.resize(nb, None);
+                    pool.install(|| {
+                        wr.par_iter_mut()
+                            .enumerate()
+                            .with_min_len(crate::CHUNK)
+                            .for_each(|(b, out)| *out = self.contact_node_frequency(contact, b));
+                    });
+                }
+            }
+            self.contact_wr = wr;
+        }
+        pool.install(|| {
+            let mut crit = element_crit;
+            if self.contact.is_some() {
                 // parallel: a minimum does not depend on the order
-                let nodes = (0..self.surface.nodes.len()).into_par_iter().with_min_len(crate::CHUNK);
-                let least = nodes
-                    .filter_map(|b| self.contact_node_frequency(contact, b))
+                let least = self
+                    .contact_wr
+                    .par_iter()
+                    .with_min_len(crate::CHUNK)
+                    .filter_map(|&wr| wr)
                     .map(|(w, r)| 2.0 / w * r)
                     .reduce(|| f64::INFINITY, f64::min);
                 crit = crit.min(least);
@@ -431,12 +482,18 @@ impl Simulation {
                 .filter(|&e| active[e] && omega[e] > w_max)
                 .map(|e| (e as u32, (omega[e] / w_max) * (omega[e] / w_max)))
                 .collect();
-            if let Some(contact) = &self.contact {
-                let nodes: Vec<(usize, f64)> = (0..self.surface.nodes.len())
-                    .into_par_iter()
+            if self.contact.is_some() {
+                // the frequencies the step was just found from
+                // (`update_time_step_for` calls this right after
+                // `critical_step`)
+                debug_assert_eq!(self.contact_wr.len(), self.surface.nodes.len());
+                let nodes: Vec<(usize, f64)> = self
+                    .contact_wr
+                    .par_iter()
+                    .enumerate()
                     .with_min_len(crate::CHUNK)
-                    .filter_map(|b| {
-                        let (w, r) = self.contact_node_frequency(contact, b)?;
+                    .filter_map(|(b, &wr)| {
+                        let (w, r) = wr?;
                         let s = (w * target / (2.0 * r)).powi(2);
                         (s > 1.0).then_some((b, s))
                     })
