@@ -108,16 +108,34 @@ impl BroadPhase {
     /// Whether some boundary node has moved more than half the margin since
     /// the last build.
     pub fn needs_update(&self, surface: &Surface, x: &[Vec2]) -> bool {
-        if self.fresh || self.changed || self.built_at.len() != surface.nodes.len() {
-            return true;
-        }
-        let limit = 0.25 * self.margin * self.margin;
-        surface.nodes.par_iter().zip(self.built_at.par_iter()).with_min_len(CHUNK).any(|(&n, b)| {
-            let p = x[n as usize];
-            let (dx, dy) = (p[0] - b[0], p[1] - b[1]);
-            let d2 = dx * dx + dy * dy;
-            d2.is_nan() || d2 > limit
-        })
+        self.stale(surface) || self.farthest(surface, x) > 0.25 * self.margin * self.margin
+    }
+
+    /// Whether the list must be rebuilt whatever the positions: never built,
+    /// reset, or the surface has changed since.
+    fn stale(&self, surface: &Surface) -> bool {
+        self.fresh || self.changed || self.built_at.len() != surface.nodes.len()
+    }
+
+    /// The largest squared distance (m²) of a boundary node from where it
+    /// was at the last build; infinite if any is NaN.
+    fn farthest(&self, surface: &Surface, x: &[Vec2]) -> f64 {
+        surface
+            .nodes
+            .par_iter()
+            .zip(self.built_at.par_iter())
+            .with_min_len(CHUNK)
+            .map(|(&n, b)| {
+                let p = x[n as usize];
+                let (dx, dy) = (p[0] - b[0], p[1] - b[1]);
+                let d2 = dx * dx + dy * dy;
+                if d2.is_nan() {
+                    f64::INFINITY
+                } else {
+                    d2
+                }
+            })
+            .reduce(|| 0.0, f64::max)
     }
 
     /// Notes that no node has moved more than `distance` (m) in a step:
@@ -136,28 +154,11 @@ impl BroadPhase {
     /// half the margin: at the paper's scale the list is rebuilt about
     /// every hundred late steps, and the scan ran at every one of them.
     pub fn update(&mut self, surface: &Surface, x: &[Vec2]) -> bool {
-        let stale = self.fresh || self.changed || self.built_at.len() != surface.nodes.len();
-        if !stale {
+        if !self.stale(surface) {
             if self.moved < self.slack {
                 return false;
             }
-            // the farthest any boundary node has gone since the build
-            let far = surface
-                .nodes
-                .par_iter()
-                .zip(self.built_at.par_iter())
-                .with_min_len(CHUNK)
-                .map(|(&n, b)| {
-                    let p = x[n as usize];
-                    let (dx, dy) = (p[0] - b[0], p[1] - b[1]);
-                    let d2 = dx * dx + dy * dy;
-                    if d2.is_nan() {
-                        f64::INFINITY
-                    } else {
-                        d2
-                    }
-                })
-                .reduce(|| 0.0, f64::max);
+            let far = self.farthest(surface, x);
             if far <= 0.25 * self.margin * self.margin {
                 self.moved = 0.0;
                 self.slack = 0.5 * self.margin * (1.0 - SLACK_REL) - far.sqrt() * (1.0 + SLACK_REL) - SLACK_ABS;

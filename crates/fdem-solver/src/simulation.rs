@@ -354,11 +354,15 @@ impl Simulation {
                 }
             }
         });
-        // the contact nodes' frequencies read the elements' just updated
+        // the contact nodes' frequencies read the elements' just updated;
+        // each node's critical step is `2r/ω` (a minimum does not depend on
+        // the order, so the passes are parallel)
+        let mut crit = element_crit;
         if let Some(contact) = &self.contact {
             let nb = self.surface.nodes.len();
             let mut wr = std::mem::take(&mut self.contact_wr);
-            match nodes {
+            let step = |wr: &Option<(f64, f64)>| wr.map_or(f64::INFINITY, |(w, r)| 2.0 / w * r);
+            let least = match nodes {
                 Some(list) if wr.len() == nb => {
                     for &v in list {
                         let b = self.surface.index_of[v as usize];
@@ -366,6 +370,9 @@ impl Simulation {
                             wr[b as usize] = self.contact_node_frequency(contact, b as usize);
                         }
                     }
+                    pool.install(|| {
+                        wr.par_iter().with_min_len(crate::CHUNK).map(step).reduce(|| f64::INFINITY, f64::min)
+                    })
                 }
                 _ => {
                     wr.resize(nb, None);
@@ -373,25 +380,18 @@ impl Simulation {
                         wr.par_iter_mut()
                             .enumerate()
                             .with_min_len(crate::CHUNK)
-                            .for_each(|(b, out)| *out = self.contact_node_frequency(contact, b));
-                    });
+                            .map(|(b, out)| {
+                                *out = self.contact_node_frequency(contact, b);
+                                step(out)
+                            })
+                            .reduce(|| f64::INFINITY, f64::min)
+                    })
                 }
-            }
+            };
             self.contact_wr = wr;
+            crit = crit.min(least);
         }
         pool.install(|| {
-            let mut crit = element_crit;
-            if self.contact.is_some() {
-                // parallel: a minimum does not depend on the order
-                let least = self
-                    .contact_wr
-                    .par_iter()
-                    .with_min_len(crate::CHUNK)
-                    .filter_map(|&wr| wr)
-                    .map(|(w, r)| 2.0 / w * r)
-                    .reduce(|| f64::INFINITY, f64::min);
-                crit = crit.min(least);
-            }
             if let Some(fr) = &self.fracture {
                 // a bond adds k ℓ (1/m_a + 1/m_b) to the frequency² of its
                 // nodes, on top of their elements and contact springs
