@@ -46,7 +46,7 @@ impl Simulation {
         for &e in &remove {
             self.elems.active[e] = false;
         }
-        self.rebuild_structure(&[]);
+        self.rebuild_structure(&[], None);
         for (v, &m) in self.nodes.v.iter_mut().zip(&self.nodes.mass) {
             if m <= 0.0 {
                 *v = [0.0; 2];

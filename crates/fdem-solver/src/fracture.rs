@@ -453,9 +453,18 @@ impl Simulation {
             }
             self.nodes.mass.push(0.0);
         }
+        // every node whose elements change: the changed elements' old and
+        // new nodes, the added elements' and the new nodes
+        let mut touched_nodes: Vec<u32> = Vec::with_capacity(6 * edits.changed.len() + 3 * edits.added.len());
         for &(e, c) in &edits.changed {
+            touched_nodes.extend(self.elems.conn[e as usize]);
+            touched_nodes.extend(c);
             self.elems.conn[e as usize] = c;
         }
+        touched_nodes.extend(edits.added.iter().flat_map(|&(_, c)| c));
+        touched_nodes.extend(n0..self.nodes.x.len() as u32);
+        touched_nodes.sort_unstable();
+        touched_nodes.dedup();
         for &(parent, c) in &edits.added {
             let p = parent as usize;
             self.elems.conn.push(c);
@@ -515,7 +524,7 @@ impl Simulation {
                 c.facet_laws.insert(ancestor_pair(anc, p, w), c.crack_law);
             }
         }
-        self.rebuild_structure(&origins);
+        self.rebuild_structure(&origins, Some(&touched_nodes));
         self.energies.remeshing += before - kinetic(self);
     }
 

@@ -208,7 +208,7 @@ impl Simulation {
         let active = vec![true; m];
         let ancestor: Vec<u32> = (0..n as u32).collect();
         let incidence = node_elements(n, &conn);
-        let surface = build_surface(&conn, &active, &incidence, &spec.points, None, |a, b| {
+        let surface = build_surface(&conn, &active, &incidence, &spec.points, None, None, |a, b| {
             contact.as_ref().map_or(0, |c| c.law_of(ancestor_pair(&ancestor, a, b)))
         });
         let pressure = resolve_pressures(&surface, &spec.pressures, &ancestor, true).map_err(SetupError::Invalid)?;
