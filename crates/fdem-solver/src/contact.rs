@@ -216,8 +216,8 @@ impl ContactModel {
             let old_states = [&self.states, &self.corner_states];
             // the old node's active contacts: (state, depth, old boundary
             // index, bearing face or NONE); the depth is the memory's, which
-            // every evaluation sets to the contact's `−gap` (reading it off
-            // the contacts, 88 bytes a node, took a third of this loop)
+            // every evaluation sets to the contact's `−gap` (so the 88-byte
+            // contact records of every node need not be read here)
             type Old = Option<(ContactState, f64, usize, u32)>;
             let old_contacts = |node: u32| -> [Old; 2] {
                 let ob = old.index_of.get(node as usize).copied().unwrap_or(NONE) as usize;
@@ -267,45 +267,20 @@ impl ContactModel {
                 }
                 let faces = new.faces[b];
                 let single = faces[0] == NONE;
-                // a smooth node that keeps its facets (same keys, same nodes)
-                // and had one contact: its old and new mean normals are the
-                // same numbers, so the rule below picks that contact unless
-                // the normal vanishes; worked out once instead of twice
-                let kept_smooth = single
-                    && !created
-                    && from[1].is_none()
-                    && from[0].is_some_and(|(_, _, ob, face)| {
-                        let (row_old, row_new) = (old.node_facets.row(ob), new.node_facets.row(b));
-                        face == NONE
-                            && row_old.len() == row_new.len()
-                            && row_old.iter().zip(row_new).all(|(&f, &g)| {
-                                let (f, g) = (&old.facets[f as usize], &new.facets[g as usize]);
-                                f.key == g.key && f.nodes == g.nodes
-                            })
-                    });
                 let (slot0, slot1) = slots;
                 for (k, slot) in [slot0, slot1].into_iter().enumerate().take(if single { 1 } else { 2 }) {
                     let key = if single { NONE } else { new.facets[faces[k] as usize].key };
                     let same_face =
                         |o: &Old| o.is_some_and(|(_, _, _, face)| face != NONE && old.facets[face as usize].key == key);
-                    let pick = if kept_smooth {
-                        let n = new.mean_normal(x, b);
-                        from[0].filter(|_| n[0] * n[0] + n[1] * n[1] > 0.0)
-                    } else {
-                        from.iter().find(|o| same_face(o)).copied().flatten().or_else(|| {
-                            // the old contact whose face points most nearly the same way
-                            let n = if single { new.mean_normal(x, b) } else { new.facet_normal(x, faces[k]) };
-                            let dot = |o: &(ContactState, f64, usize, u32)| {
-                                let m = old_normal(o);
-                                m[0] * n[0] + m[1] * n[1]
-                            };
-                            from.iter()
-                                .flatten()
-                                .filter(|o| dot(o) > 0.0)
-                                .max_by(|p, q| dot(p).total_cmp(&dot(q)))
-                                .copied()
-                        })
-                    };
+                    let pick = from.iter().find(|o| same_face(o)).copied().flatten().or_else(|| {
+                        // the old contact whose face points most nearly the same way
+                        let n = if single { new.mean_normal(x, b) } else { new.facet_normal(x, faces[k]) };
+                        let dot = |o: &(ContactState, f64, usize, u32)| {
+                            let m = old_normal(o);
+                            m[0] * n[0] + m[1] * n[1]
+                        };
+                        from.iter().flatten().filter(|o| dot(o) > 0.0).max_by(|p, q| dot(p).total_cmp(&dot(q))).copied()
+                    });
                     let Some((s, depth, ..)) = pick else { continue };
                     let of = &old.facets[s.facet as usize];
                     let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
