@@ -32,9 +32,9 @@ CASE = "CavingCase(size=5.0, joint_scale=5.0, support=6.0, until=0.3, interval=0
 
 def small_caving(threads: int) -> fdem.Simulation:
     case = eval(CASE, {"CavingCase": CavingCase})
-    sim = fdem.Simulation(caving_model(case), threads=threads, stiffness_damping=2e-6)
+    sim = fdem.Simulation(caving_model(case), threads=threads, stiffness_damping=2e-6, safety=case.safety)
     sim.equilibrate(max_velocity=1e-3)
-    sim.configure(mass_scaling=0.8 * sim.time_step)  # as run_caving does
+    sim.configure(mass_scaling=case.mass_scaling * sim.time_step)  # as run_caving does
     return sim
 
 

@@ -26,7 +26,7 @@ pub mod surface;
 pub use broad::BroadPhase;
 pub use cohesive::{Bond, BondResponse};
 pub use law::{InterfaceLaw, LawError};
-pub use narrow::{ContactState, NodeContact};
+pub use narrow::{ContactState, Dashpot, NodeContact};
 pub use surface::{Surface, SurfaceFacet};
 
 /// A 2D vector `[x, y]`.

@@ -73,9 +73,14 @@ pub struct NodeContact {
     /// Force on the node (N/m); the facet's nodes get `−(1−ξ)` and `−ξ`
     /// times it.
     pub force: Vec2,
-    /// The normal dashpot's part of `force` (N/m), so that its work can be
-    /// measured where the scheme applies it.
+    /// The normal dashpot's part of `force` (N/m): its estimate from the
+    /// velocities of the step before ([`Dashpot`]), which the node pass
+    /// replaces by the dashpot's force on the predicted velocities.
     pub damping_force: Vec2,
+    /// The normal dashpot as the node pass applies it. Saved apart from the
+    /// rest (checkpoint format 6).
+    #[serde(skip)]
+    pub dashpot: Dashpot,
     /// Normal force `f_n ≥ 0` (N/m).
     pub normal_force: f64,
     /// Tangential force (N/m).
@@ -87,6 +92,30 @@ pub struct NodeContact {
     /// nothing else). Derived: not saved, see [`NodeContact::locate`].
     #[serde(skip)]
     pub ends: [u32; 2],
+}
+
+/// A contact's normal dashpot (paper D, DESIGN §4.5), applied by the node
+/// pass on the relative normal velocity that the step's other forces would
+/// give, by a backward-Euler step ([`dashpot_forces`]):
+///
+/// `f_d = max(−c ġᵉ / (1 + c h / μ), −f_s)`
+///
+/// with `ġᵉ` the predicted gap rate, `h` the velocity step, `f_s` the
+/// spring's normal force (no pull), and `μ` the pair's effective mass along
+/// the normal with each node's mass shared among the `n` dashpots that act
+/// on it: `1/μ = n_s/m_s + (1−ξ)² n_a/m_a + ξ² n_b/m_b`. For an isolated
+/// pair (`n = 1`) this is the exact backward-Euler dashpot; dashpots that
+/// share nodes together never take more than the backward-Euler step of
+/// their sum (the sharing), so the dashpots never shorten the stable step,
+/// and a pair moving together (a falling stack) feels no drag.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Dashpot {
+    /// The facet's outward unit normal `n`.
+    pub normal: Vec2,
+    /// Dashpot coefficient `c` (N·s/m per metre of thickness); zero for none.
+    pub coefficient: f64,
+    /// The spring's normal force `f_s ≥ 0` (N/m).
+    pub spring: f64,
 }
 
 impl NodeContact {
@@ -686,8 +715,16 @@ fn respond(
     let m = if mf > 0.0 { ms * mf / (ms + mf) } else { ms };
     let dashpot = law.damping_ratio * 2.0 * (alpha_n * m).sqrt();
     let spring = -alpha_n * gap;
-    let normal_force = (spring - dashpot * gap_rate).max(0.0);
-    // the dashpot's actual share of the normal force, after the no-pull clamp
+    // the pair's effective mass along the normal, as an impulse moves the
+    // gap rate (a massless end moves with nothing: no term), for the
+    // estimate
+    let inv = |m: f64| if m > 0.0 { 1.0 / m } else { 0.0 };
+    let inverse_mass = inv(inp.mass[node]) + (1.0 - xi) * (1.0 - xi) * inv(inp.mass[ia]) + xi * xi * inv(inp.mass[ib]);
+    // the estimate of the dashpot on the last velocities, for the friction
+    // limit and the readouts; the node pass applies it on the predicted ones
+    let estimate = dashpot / (1.0 + dashpot * inp.dt * inverse_mass);
+    let normal_force = (spring - estimate * gap_rate).max(0.0);
+    // the dashpot's share of the normal force, after the no-pull clamp
     let fd = normal_force - spring;
     // carry the elastic tangential gap, measured along the old facet's
     // direction `d`, over to a neighbouring facet or a resumed contact
@@ -720,6 +757,7 @@ fn respond(
         gap,
         force: [normal_force * n[0] - ft * t[0], normal_force * n[1] - ft * t[1]],
         damping_force: [fd * n[0], fd * n[1]],
+        dashpot: Dashpot { normal: n, coefficient: dashpot, spring },
         normal_force,
         tangential_force: ft,
         slipping: work > 0.0,
@@ -727,29 +765,114 @@ fn respond(
     }
 }
 
-/// Adds every contact force (first contacts, then the corners' second
-/// ones) into `forces`, and the dashpot parts also into `damping` (one
-/// entry per boundary node, zeroed first), in boundary-node order:
-/// deterministic. Reads the contacts of the busy nodes only (`busy` as
-/// left by [`evaluate`]: a contact implies a memory).
-pub fn assemble(contacts: [&[NodeContact]; 2], busy: &[u8], forces: &mut [Vec2], damping: &mut [Vec2]) {
+/// Adds every contact force into `forces`, and the dashpot parts also into
+/// `damping` (one entry per boundary node, zeroed first), node by node in
+/// boundary-node order (a node's first contact, then its corner's second):
+/// deterministic. Counts in `damped` the dashpots that act on each boundary
+/// node (as the node, or as a facet end with a non-zero weight), and lists
+/// the contacts with a dashpot in `dashpots` (as `2b + k`, `k` = 0 for the
+/// first contact, 1 for the second), in the same order. Reads the contacts
+/// of the busy nodes only (`busy` as left by [`evaluate`]: a contact
+/// implies a memory).
+pub fn assemble(
+    contacts: [&[NodeContact]; 2],
+    busy: &[u8],
+    forces: &mut [Vec2],
+    damping: &mut [Vec2],
+    damped: &mut [u16],
+    dashpots: &mut Vec<u32>,
+) {
     forces.iter_mut().for_each(|f| *f = [0.0; 2]);
     damping.iter_mut().for_each(|f| *f = [0.0; 2]);
-    let of = |k: usize| {
-        let list = contacts[k];
-        busy.iter().enumerate().filter(move |&(_, &f)| f & (1 << k) != 0).map(move |(b, _)| (b, &list[b]))
-    };
-    for (b, c) in of(0).chain(of(1)) {
-        if c.facet == NONE {
+    damped.iter_mut().for_each(|d| *d = 0);
+    dashpots.clear();
+    for (b, &flags) in busy.iter().enumerate() {
+        if flags == 0 {
             continue;
         }
-        let [fa, fb] = c.ends.map(|i| i as usize);
-        for (out, f) in [(&mut *forces, c.force), (&mut *damping, c.damping_force)] {
-            for d in 0..2 {
-                out[b][d] += f[d];
-                out[fa][d] -= (1.0 - c.xi) * f[d];
-                out[fb][d] -= c.xi * f[d];
+        for k in 0..2 {
+            let c = &contacts[k][b];
+            if flags & (1 << k) == 0 || c.facet == NONE {
+                continue;
             }
+            let [fa, fb] = c.ends.map(|i| i as usize);
+            for (out, f) in [(&mut *forces, c.force), (&mut *damping, c.damping_force)] {
+                for d in 0..2 {
+                    out[b][d] += f[d];
+                    out[fa][d] -= (1.0 - c.xi) * f[d];
+                    out[fb][d] -= c.xi * f[d];
+                }
+            }
+            if c.dashpot.coefficient > 0.0 {
+                dashpots.push(2 * b as u32 + k as u32);
+                for (node, w) in [(b, 1.0), (fa, 1.0 - c.xi), (fb, c.xi)] {
+                    if w > 0.0 {
+                        damped[node] = damped[node].saturating_add(1);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The dashpot forces `force` (N/m along each contact's normal on its node,
+/// one per entry of `dashpots`, the list of [`assemble`]) from the
+/// predicted velocities `v` and the masses `mass` (by mesh id; `nodes` maps
+/// boundary index to mesh id), the dashpot counts `damped` of [`assemble`]
+/// (per boundary node) and the velocity step `h` (s): `f_d = max(−c ġᵉ /
+/// (1 + c h / μ), −f_s)` ([`Dashpot`]). In parallel; each contact reads
+/// three nodes.
+pub fn dashpot_forces(
+    contacts: [&[NodeContact]; 2],
+    dashpots: &[u32],
+    nodes: &[u32],
+    damped: &[u16],
+    mass: &[f64],
+    v: &[Vec2],
+    h: f64,
+    force: &mut [f64],
+) {
+    // each node's mass shared among the dashpots on it (a massless node
+    // moves with nothing: no term)
+    let share = |bi: usize, node: usize| {
+        let m = mass[node];
+        if m > 0.0 {
+            f64::from(damped[bi]) / m
+        } else {
+            0.0
+        }
+    };
+    force.par_iter_mut().zip(dashpots.par_iter()).with_min_len(CHUNK).for_each(|(out, &id)| {
+        let (b, k) = ((id / 2) as usize, (id % 2) as usize);
+        let c = &contacts[k][b];
+        let d = &c.dashpot;
+        let [ba, bb] = c.ends.map(|i| i as usize);
+        let (s, a, e) = (nodes[b] as usize, nodes[ba] as usize, nodes[bb] as usize);
+        let (vs, va, vb) = (v[s], v[a], v[e]);
+        let (wa, wb) = (1.0 - c.xi, c.xi);
+        let rel = [vs[0] - wa * va[0] - wb * vb[0], vs[1] - wa * va[1] - wb * vb[1]];
+        let rate = rel[0] * d.normal[0] + rel[1] * d.normal[1];
+        let inverse_mass = share(b, s) + wa * wa * share(ba, a) + wb * wb * share(bb, e);
+        let f = -d.coefficient * rate / (1.0 + d.coefficient * h * inverse_mass);
+        *out = f.max(-d.spring);
+    });
+}
+
+/// Adds the dashpot forces `force` of [`dashpot_forces`] into `out` (one
+/// entry per boundary node, zeroed first), in the order of `dashpots`:
+/// deterministic.
+pub fn assemble_dashpots(contacts: [&[NodeContact]; 2], dashpots: &[u32], force: &[f64], out: &mut [Vec2]) {
+    out.iter_mut().for_each(|f| *f = [0.0; 2]);
+    for (&id, &fd) in dashpots.iter().zip(force) {
+        let (b, k) = ((id / 2) as usize, (id % 2) as usize);
+        let c = &contacts[k][b];
+        let n = c.dashpot.normal;
+        let f = [fd * n[0], fd * n[1]];
+        let [fa, fb] = c.ends.map(|i| i as usize);
+        for d in 0..2 {
+            out[b][d] += f[d];
+            out[fa][d] -= (1.0 - c.xi) * f[d];
+            out[fb][d] -= c.xi * f[d];
         }
     }
 }
@@ -862,10 +985,12 @@ mod tests {
     }
 
     /// The assembly over busy nodes adds the same forces in the same order
-    /// as a walk over every node's contacts (all first contacts in node
-    /// order, then the corner contacts): bit for bit, including a node busy
-    /// with its corner contact only and nodes whose memory outlived their
-    /// contact.
+    /// as a walk over every node's contacts (node by node, a node's first
+    /// contact, then its corner's second): bit for bit, including a node
+    /// busy with its corner contact only and nodes whose memory outlived
+    /// their contact; it lists the contacts with a dashpot in that order and
+    /// counts the dashpots on each node, and the dashpot forces are added up
+    /// in that order too.
     #[test]
     fn assembly_of_busy_nodes_matches_a_walk_over_every_contact() {
         let nb = 6;
@@ -875,6 +1000,7 @@ mod tests {
             xi,
             force: [f, 0.3 * f],
             damping_force: [0.1 * f, -0.2 * f],
+            dashpot: Dashpot { normal: [0.6, -0.8], coefficient: f.abs(), spring: 1.0 },
             ends,
             ..empty
         };
@@ -882,7 +1008,7 @@ mod tests {
         let mut corner = vec![empty; nb];
         first[0] = contact(4, 0.3, [2, 3], 1.7);
         first[3] = contact(1, 0.9, [0, 2], -2.1e6);
-        first[5] = contact(2, 0.1, [3, 0], 3.3e-3);
+        first[5] = contact(2, 0.0, [3, 0], 3.3e-3); // at its facet's first end
         corner[1] = contact(0, 0.5, [3, 5], 7.0); // busy with its corner only
         corner[3] = contact(5, 0.25, [0, 1], 1.1e5);
         let mut busy: Vec<u8> = first
@@ -891,24 +1017,88 @@ mod tests {
             .map(|(c, k)| u8::from(c.facet != NONE) | u8::from(k.facet != NONE) << 1)
             .collect();
         busy[4] = 1; // a memory without a contact this step
-        let (mut forces, mut damping) = (vec![[9.0; 2]; nb], vec![[9.0; 2]; nb]);
-        assemble([&first, &corner], &busy, &mut forces, &mut damping);
-        let (mut want_f, mut want_d) = (vec![[0.0; 2]; nb], vec![[0.0; 2]; nb]);
-        for (b, c) in first.iter().enumerate().chain(corner.iter().enumerate()) {
-            if c.facet == NONE {
-                continue;
-            }
-            let [fa, fb] = c.ends.map(|i| i as usize);
-            for (out, f) in [(&mut want_f, c.force), (&mut want_d, c.damping_force)] {
-                for d in 0..2 {
-                    out[b][d] += f[d];
-                    out[fa][d] -= (1.0 - c.xi) * f[d];
-                    out[fb][d] -= c.xi * f[d];
+        first[0].dashpot.coefficient = 0.0; // no dashpot
+        let (mut forces, mut damping, mut dashpot_sum) = (vec![[9.0; 2]; nb], vec![[9.0; 2]; nb], vec![[9.0; 2]; nb]);
+        let (mut damped, mut list) = (vec![9; nb], vec![7]);
+        assemble([&first, &corner], &busy, &mut forces, &mut damping, &mut damped, &mut list);
+        let fd: Vec<f64> = (0..list.len()).map(|i| 0.5 + i as f64).collect();
+        assemble_dashpots([&first, &corner], &list, &fd, &mut dashpot_sum);
+        let (mut want_f, mut want_d, mut want_p) = (vec![[0.0; 2]; nb], vec![[0.0; 2]; nb], vec![[0.0; 2]; nb]);
+        let (mut want_damped, mut want_list) = (vec![0u16; nb], Vec::new());
+        for b in 0..nb {
+            for (k, c) in [&first[b], &corner[b]].into_iter().enumerate() {
+                if c.facet == NONE {
+                    continue;
+                }
+                let [fa, fb] = c.ends.map(|i| i as usize);
+                for (out, f) in [(&mut want_f, c.force), (&mut want_d, c.damping_force)] {
+                    for d in 0..2 {
+                        out[b][d] += f[d];
+                        out[fa][d] -= (1.0 - c.xi) * f[d];
+                        out[fb][d] -= c.xi * f[d];
+                    }
+                }
+                // the dashpot: its force along the normal, on the node and
+                // (weighted) on the facet's ends, each counted where its
+                // weight is not zero
+                if c.dashpot.coefficient > 0.0 {
+                    let f = c.dashpot.normal.map(|n| fd[want_list.len()] * n);
+                    want_list.push(2 * b as u32 + k as u32);
+                    for d in 0..2 {
+                        want_p[b][d] += f[d];
+                        want_p[fa][d] -= (1.0 - c.xi) * f[d];
+                        want_p[fb][d] -= c.xi * f[d];
+                    }
+                    for (node, w) in [(b, 1.0), (fa, 1.0 - c.xi), (fb, c.xi)] {
+                        want_damped[node] += u16::from(w > 0.0);
+                    }
                 }
             }
         }
+        assert_eq!(list, [3, 6, 7, 10]);
+        assert_eq!(list, want_list);
         assert_eq!(forces, want_f);
         assert_eq!(damping, want_d);
+        assert_eq!(dashpot_sum, want_p);
+        assert_eq!(damped, want_damped);
+        // node 0 is an end of three dashpots' facets, of node 5's with weight 0
+        assert_eq!(damped[0], 2);
+    }
+
+    /// The dashpot of an isolated pair is the backward-Euler step of the
+    /// pair: a node of mass 2 approaching a facet whose ends have mass 1
+    /// and 3 at ξ = ¼ (`1/μ = 1/2 + (¾)²/1 + (¼)²/3`) at a predicted gap
+    /// rate −1, with `c = 4`, `h = 0.1`: `f = 4 / (1 + 0.4/μ)`; a pair
+    /// moving together feels nothing; a separating pair's pull is cut at the
+    /// spring force; with every node shared by two dashpots `1/μ` doubles.
+    #[test]
+    fn an_isolated_dashpot_is_the_backward_euler_step_of_its_pair() {
+        let c = NodeContact {
+            facet: 0,
+            xi: 0.25,
+            ends: [1, 2],
+            dashpot: Dashpot { normal: [0.0, 1.0], coefficient: 4.0, spring: 0.5 },
+            ..Default::default()
+        };
+        let empty = NodeContact { facet: NONE, ..Default::default() };
+        let contacts = [vec![c, empty, empty], vec![empty; 3]];
+        let nodes = [0, 1, 2];
+        let mass = [2.0, 1.0, 3.0];
+        let inv_mu: f64 = 0.5 + 0.75 * 0.75 + 0.25 * 0.25 / 3.0;
+        let force = |v: [Vec2; 3], counts: [u16; 3]| {
+            let mut f = [0.0];
+            dashpot_forces([&contacts[0], &contacts[1]], &[0], &nodes, &counts, &mass, &v, 0.1, &mut f);
+            f[0]
+        };
+        let f = force([[0.0, -1.0], [0.0, 0.0], [0.0, 0.0]], [1, 1, 1]);
+        assert!((f - 4.0 / (1.0 + 0.4 * inv_mu)).abs() < 1e-15, "{f}");
+        // the backward-Euler property: the impulse h f brings the gap rate
+        // to −1 + h f / μ, and f = −c times that
+        assert!((f + 4.0 * (-1.0 + 0.1 * f * inv_mu)).abs() < 1e-12);
+        assert_eq!(force([[0.3, 2.0]; 3], [1, 1, 1]), 0.0);
+        assert_eq!(force([[0.0, 1.0], [0.0, 0.0], [0.0, 0.0]], [1, 1, 1]), -0.5);
+        let shared = force([[0.0, -1.0], [0.0, 0.0], [0.0, 0.0]], [2, 2, 2]);
+        assert!((shared - 4.0 / (1.0 + 0.8 * inv_mu)).abs() < 1e-15);
     }
 
     /// Two blocks pressed 1 cm into each other along the line y = 0: the

@@ -43,7 +43,7 @@ use crate::passes::{Material, PressureFacet};
 use crate::renumber::Layout;
 use crate::simulation::{ContactStats, Elements, Nodes, PhaseTimes, Simulation};
 use crate::CHUNK;
-use fdem_contact::{ContactState, NodeContact, Surface};
+use fdem_contact::{ContactState, Dashpot, NodeContact, Surface};
 use fdem_element::Vec2;
 use fdem_mesh::Csr;
 
@@ -58,7 +58,8 @@ pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
 /// 1–4 kept its angle (rad): an older file's angles are converted as it is
 /// read, so its run continues with that direction (not bit for bit the run
 /// an older build would continue: its arithmetic differs in the last bits).
-pub const FORMAT_VERSION: u32 = 5;
+/// Format 6 appends [`Format6`] (the contact dashpots of the node pass).
+pub const FORMAT_VERSION: u32 = 6;
 const HEADER: usize = 40;
 
 /// Why a checkpoint could not be written or read.
@@ -141,7 +142,11 @@ macro_rules! saved_state {
                 phase_times: PhaseTimes::default(),
                 node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],
                 elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
-                contact_wr: Vec::new(),
+                contact_omega: Vec::new(),
+                contact_damped: Vec::new(),
+                dashpot_force: Vec::new(),
+                pred_v: Vec::new(),
+                pred_f: Vec::new(),
                 layout: Layout::default(),
                 pool,
             };
@@ -275,6 +280,29 @@ impl Format4 {
     }
 }
 
+/// What format 6 added, written after [`Format4`]: the dashpot of every
+/// contact (first and corner), which the next node pass applies
+/// ([`Dashpot`], docs/contact.md). A file of an older format restores with
+/// none: its first step has its dashpots' estimate only.
+#[derive(Serialize, Deserialize)]
+struct Format6 {
+    dashpots: [Vec<Dashpot>; 2],
+}
+
+impl Format6 {
+    fn of(s: &Simulation) -> Self {
+        let of = |list: &[NodeContact]| list.iter().map(|c| c.dashpot).collect();
+        let dashpots = s.contact.as_ref().map_or_else(Default::default, |c| [of(&c.out), of(&c.corner_out)]);
+        Format6 { dashpots }
+    }
+
+    /// No dashpots: what an older file restores with.
+    fn none(o: &StateOwned) -> Self {
+        let nb = if o.contact.is_some() { o.surface.nodes.len() } else { 0 };
+        Format6 { dashpots: [vec![Dashpot::default(); nb], vec![Dashpot::default(); nb]] }
+    }
+}
+
 fn le_u32(b: &[u8]) -> u32 {
     u32::from_le_bytes([b[0], b[1], b[2], b[3]])
 }
@@ -295,6 +323,7 @@ impl Simulation {
         state.extend(postcard::to_stdvec(&Format2::of(self)).expect("format-2 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format3::of(self)).expect("format-3 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format4::of(self)).expect("format-4 data is serialisable"));
+        state.extend(postcard::to_stdvec(&Format6::of(self)).expect("format-6 data is serialisable"));
         let mut out = Vec::with_capacity(HEADER + state.len() + user.len());
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -364,6 +393,11 @@ impl Simulation {
         } else {
             (Format4::none(&owned), rest)
         };
+        let (dashpots, rest) = if version >= 6 {
+            postcard::take_from_bytes::<Format6>(rest).map_err(decode)?
+        } else {
+            (Format6::none(&owned), rest)
+        };
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
         }
@@ -374,6 +408,9 @@ impl Simulation {
             }
         }
         check_consistent(&owned)?;
+        if dashpots.dashpots.iter().any(|d| d.len() != owned.contact_force.len()) {
+            return Err(CheckpointError::Invalid("the contact dashpots do not match the surface".into()));
+        }
         if !renumbering.layout.is_consistent(owned.nodes.x.len(), owned.elems.conn.len()) {
             return Err(CheckpointError::Invalid("the node and element numbering is not a permutation".into()));
         }
@@ -389,6 +426,17 @@ impl Simulation {
             .map_err(|e| CheckpointError::Io(format!("cannot start {threads} threads: {e}")))?;
         let mut sim = assemble(owned, Arc::new(pool));
         sim.layout = renumbering.layout;
+        if let Some(c) = sim.contact.as_mut() {
+            for (list, saved) in [&mut c.out, &mut c.corner_out].into_iter().zip(dashpots.dashpots) {
+                for (o, d) in list.iter_mut().zip(saved) {
+                    o.dashpot = d;
+                }
+            }
+            // the assembly again, which also finds the damped nodes (the
+            // same forces, in the same order, as the saved ones)
+            sim.contact_damped = vec![0; sim.contact_force.len()];
+            c.reassemble(&mut sim.contact_force, &mut sim.contact_damping_force, &mut sim.contact_damped);
+        }
         Ok((sim, user.to_vec()))
     }
 

@@ -47,11 +47,20 @@ pub(crate) struct ContactModel {
     /// Per facet: its frame at the current evaluation (scratch).
     #[serde(skip)]
     frames: Vec<FacetFrame>,
+    /// The contacts with a dashpot, as `2b + k`, in the assembly's order,
+    /// and their dashpot forces of the node pass (scratch, set by
+    /// [`ContactModel::assemble`] and [`ContactModel::dashpots`]).
+    #[serde(skip)]
+    dashpot_list: Vec<u32>,
+    #[serde(skip)]
+    dashpot_force: Vec<f64>,
     /// Candidate pairs evaluated so far.
     pub pairs_evaluated: u64,
     /// Largest stiffness over all laws (Pa/m), for the stable step.
     pub max_stiffness: f64,
-    /// Largest damping ratio over all laws.
+    /// Largest damping ratio over all laws. Kept in the saved state; the
+    /// stable step no longer needs it since the node pass takes the
+    /// dashpots implicitly (checkpoint format 6).
     pub max_damping: f64,
     /// Margin given by the user, if any.
     margin: Option<f64>,
@@ -75,6 +84,11 @@ impl ContactModel {
         // any, so only new entries need a value (the clear refilled 24 MB
         // at every insertion at the paper's scale)
         self.frames.resize(surface.facets.len(), FacetFrame::default());
+        // at most two contacts a node: filled by every assembly without
+        // growing
+        let most = 2 * surface.nodes.len();
+        self.dashpot_list.reserve(most.saturating_sub(self.dashpot_list.len()));
+        self.dashpot_force.reserve(most.saturating_sub(self.dashpot_force.len()));
     }
 
     /// Derives the busy flags from the memories (after they were set other
@@ -158,6 +172,8 @@ impl ContactModel {
             spare_out: Default::default(),
             partials: Vec::new(),
             frames: Vec::new(),
+            dashpot_list: Vec::new(),
+            dashpot_force: Vec::new(),
             pairs_evaluated: 0,
             max_stiffness,
             max_damping,
@@ -339,10 +355,11 @@ impl ContactModel {
 
     /// The assembly (serial, in boundary-node order) after
     /// [`ContactModel::search`]: the forces into `forces` (per boundary
-    /// node), their dashpot parts into `damping`; returns the summed
-    /// partials.
-    pub fn assemble(&mut self, forces: &mut [Vec2], damping: &mut [Vec2]) -> ContactPartial {
-        narrow::assemble([&self.out, &self.corner_out], &self.busy, forces, damping);
+    /// node), their dashpot parts into `damping`, and how many dashpots act
+    /// on each boundary node into `damped` ([`narrow::assemble`]); returns
+    /// the summed partials.
+    pub fn assemble(&mut self, forces: &mut [Vec2], damping: &mut [Vec2], damped: &mut [u16]) -> ContactPartial {
+        narrow::assemble([&self.out, &self.corner_out], &self.busy, forces, damping, damped, &mut self.dashpot_list);
         let mut sum = ContactPartial::default();
         for p in &self.partials {
             sum.pairs += p.pairs;
@@ -352,5 +369,28 @@ impl ContactModel {
         }
         self.pairs_evaluated += sum.pairs;
         sum
+    }
+
+    /// [`ContactModel::assemble`] again without counting the pairs: after a
+    /// restore, for the damped nodes (the forces come out as saved).
+    pub fn reassemble(&mut self, forces: &mut [Vec2], damping: &mut [Vec2], damped: &mut [u16]) {
+        narrow::assemble([&self.out, &self.corner_out], &self.busy, forces, damping, damped, &mut self.dashpot_list);
+    }
+
+    /// Whether the last assembly found a contact with a dashpot.
+    pub fn has_dashpots(&self) -> bool {
+        !self.dashpot_list.is_empty()
+    }
+
+    /// The dashpot forces of the node pass ([`narrow::Dashpot`]): each
+    /// contact's from the predicted velocities `v` and the masses `mass` (by
+    /// node; `nodes` maps boundary index to node, `damped` counts the
+    /// dashpots per boundary node) with the velocity step `h` (s), then
+    /// added up per boundary node into `out` (N), in the assembly's order.
+    pub fn dashpots(&mut self, nodes: &[u32], damped: &[u16], mass: &[f64], v: &[Vec2], h: f64, out: &mut [Vec2]) {
+        let contacts = [&self.out[..], &self.corner_out[..]];
+        self.dashpot_force.resize(self.dashpot_list.len(), 0.0);
+        narrow::dashpot_forces(contacts, &self.dashpot_list, nodes, damped, mass, v, h, &mut self.dashpot_force);
+        narrow::assemble_dashpots(contacts, &self.dashpot_list, &self.dashpot_force, out);
     }
 }

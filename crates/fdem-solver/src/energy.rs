@@ -140,6 +140,21 @@ pub(crate) struct NodePartial {
     pub bad_node: Option<(u32, &'static str)>,
 }
 
+impl NodePartial {
+    /// Adds `o`'s sums to these (the second stage of a node pass).
+    pub fn merge(&mut self, o: &NodePartial) {
+        self.external += o.external;
+        self.contact += o.contact;
+        self.contact_damping += o.contact_damping;
+        self.support += o.support;
+        self.damping += o.damping;
+        if o.max_speed2 > self.max_speed2 || o.max_speed2.is_nan() {
+            self.max_speed2 = o.max_speed2;
+        }
+        self.bad_node = self.bad_node.or(o.bad_node);
+    }
+}
+
 /// Per-chunk partial sums of the element pass.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct ElementPartial {

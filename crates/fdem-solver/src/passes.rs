@@ -65,11 +65,31 @@ pub(crate) struct NodeInputs<'a> {
 ///
 /// Modified central difference with mass damping α (DESIGN §4.2):
 /// `v^{n+½} = [(1 − αΔt/2) v^{n−½} + Δt f/m] / (1 + αΔt/2)`.
-pub(crate) fn node_pass(inp: &NodeInputs<'_>, x: &mut [Vec2], v: &mut [Vec2], partials: &mut [NodePartial]) {
-    let a = 0.5 * inp.alpha * inp.dt_avg;
-    let (keep, scale) = (1.0 - a, 1.0 / (1.0 + a));
-    x.par_chunks_mut(CHUNK).zip(v.par_chunks_mut(CHUNK)).zip(partials.par_iter_mut()).enumerate().for_each(
-        |(c, ((xc, vc), part))| {
+///
+/// With `damped` non-empty (per boundary node: a contact dashpot acts on
+/// it) this is the first of two stages: a damped node is not moved; its
+/// velocity without its dashpot forces (the prediction, held components at
+/// their prescribed values) goes into `pred_v` and that net force into
+/// `pred_f` (both by node, as long as `x`), from which the contact's
+/// dashpot forces are worked out (`fdem_contact::narrow::dashpot_forces`)
+/// before [`node_pass_damped`] finishes those nodes.
+pub(crate) fn node_pass(
+    inp: &NodeInputs<'_>,
+    x: &mut [Vec2],
+    v: &mut [Vec2],
+    partials: &mut [NodePartial],
+    damped: &[u16],
+    pred_v: &mut [Vec2],
+    pred_f: &mut [Vec2],
+) {
+    let split = !damped.is_empty();
+    let (keep, scale) = inp.damping_factors();
+    x.par_chunks_mut(CHUNK)
+        .zip(v.par_chunks_mut(CHUNK))
+        .zip(partials.par_iter_mut())
+        .zip(pred_v.par_chunks_mut(CHUNK).zip(pred_f.par_chunks_mut(CHUNK)))
+        .enumerate()
+        .for_each(|(c, (((xc, vc), part), (pvc, pfc)))| {
             let mut acc = NodePartial::default();
             let base = c * CHUNK;
             for j in 0..xc.len() {
@@ -79,77 +99,162 @@ pub(crate) fn node_pass(inp: &NodeInputs<'_>, x: &mut [Vec2], v: &mut [Vec2], pa
                     continue;
                 }
                 let bn = inp.bnode[i];
-                let (fp, fc, fd) = if bn == NONE {
-                    ([0.0; 2], [0.0; 2], [0.0; 2])
-                } else {
-                    let b = bn as usize;
-                    let zero = [0.0; 2];
-                    (
-                        inp.pressure[b],
-                        inp.contact.get(b).copied().unwrap_or(zero),
-                        inp.contact_damping.get(b).copied().unwrap_or(zero),
-                    )
-                };
-                let f_ext = [m * inp.gravity[0] + fp[0], m * inp.gravity[1] + fp[1]];
+                let (f_ext, fc, fd) = inp.surface_terms(i, m);
                 let mut f = [f_ext[0] + fc[0], f_ext[1] + fc[1]];
                 for &item in inp.node_elems.row(i) {
                     let fe = inp.elem_force[item as usize];
                     f[0] -= fe[0];
                     f[1] -= fe[1];
                 }
-                let v_old = vc[j];
-                let r = inp.dt_avg / m;
-                let mut v_new = [(keep * v_old[0] + r * f[0]) * scale, (keep * v_old[1] + r * f[1]) * scale];
-                let b = inp.bc[i];
-                let dxc = |vn: Vec2| {
-                    [0.5 * (inp.dt * vn[0] + inp.dt_prev * v_old[0]), 0.5 * (inp.dt * vn[1] + inp.dt_prev * v_old[1])]
-                };
-                if b != NO_BC {
-                    let con = &inp.constraints[b as usize];
-                    let amp = con.amplitude.map_or(1.0, |k| inp.amplitude_values[k as usize]);
-                    for d in 0..2 {
-                        if con.fixed[d] {
-                            v_new[d] = con.value[d] * amp;
-                        }
-                    }
-                    // reaction R = m a + damping force − f on the held components
-                    let dx = dxc(v_new);
-                    for d in 0..2 {
-                        if con.fixed[d] {
-                            let damp = inp.alpha * m * 0.5 * (v_old[d] + v_new[d]);
-                            let reaction = m * (v_new[d] - v_old[d]) / inp.dt_avg + damp - f[d];
-                            acc.support += reaction * dx[d];
-                        }
-                    }
+                if split && bn != NONE && damped[bn as usize] > 0 {
+                    // the prediction: every force but the dashpots' estimate
+                    let f = [f[0] - fd[0], f[1] - fd[1]];
+                    let r = inp.dt_avg / m;
+                    let v_old = vc[j];
+                    let mut vp = [(keep * v_old[0] + r * f[0]) * scale, (keep * v_old[1] + r * f[1]) * scale];
+                    inp.hold(i, &mut vp);
+                    pvc[j] = vp;
+                    pfc[j] = f;
+                    continue;
                 }
-                let dx = dxc(v_new);
-                acc.external += f_ext[0] * dx[0] + f_ext[1] * dx[1];
-                acc.contact += fc[0] * dx[0] + fc[1] * dx[1];
-                acc.contact_damping += fd[0] * dx[0] + fd[1] * dx[1];
-                if inp.alpha > 0.0 {
-                    let vm = [0.5 * (v_old[0] + v_new[0]), 0.5 * (v_old[1] + v_new[1])];
-                    acc.damping += inp.alpha * m * (vm[0] * dx[0] + vm[1] * dx[1]);
-                }
-                let p = &mut xc[j];
-                p[0] += inp.dt * v_new[0];
-                p[1] += inp.dt * v_new[1];
-                vc[j] = v_new;
-                let speed2 = v_new[0] * v_new[0] + v_new[1] * v_new[1];
-                // a NaN is kept (`max` would drop it)
-                if speed2 > acc.max_speed2 || speed2.is_nan() {
-                    acc.max_speed2 = speed2;
-                }
-                if acc.bad_node.is_none() {
-                    if !(v_new[0].is_finite() && v_new[1].is_finite()) {
-                        acc.bad_node = Some((i as u32, "velocity"));
-                    } else if !(p[0].is_finite() && p[1].is_finite()) {
-                        acc.bad_node = Some((i as u32, "position"));
-                    }
-                }
+                advance(inp, i, m, [f, f_ext, fc, fd], &mut xc[j], &mut vc[j], &mut acc);
             }
             *part = acc;
+        });
+}
+
+/// The second stage of [`node_pass`] with dashpots: every damped node
+/// (`damped`, per boundary node) moves with its predicted net force
+/// `pred_f` (by node) plus its dashpot forces `dashpot` (per boundary node,
+/// as applied on the predicted velocities); its terms are added to the
+/// partial sums of the first stage.
+pub(crate) fn node_pass_damped(
+    inp: &NodeInputs<'_>,
+    x: &mut [Vec2],
+    v: &mut [Vec2],
+    partials: &mut [NodePartial],
+    damped: &[u16],
+    pred_f: &[Vec2],
+    dashpot: &[Vec2],
+) {
+    x.par_chunks_mut(CHUNK).zip(v.par_chunks_mut(CHUNK)).zip(partials.par_iter_mut()).enumerate().for_each(
+        |(c, ((xc, vc), part))| {
+            let mut acc = NodePartial::default();
+            let base = c * CHUNK;
+            for j in 0..xc.len() {
+                let i = base + j;
+                let bn = inp.bnode[i];
+                let m = inp.mass[i];
+                if bn == NONE || damped[bn as usize] == 0 || m <= 0.0 {
+                    continue;
+                }
+                let (f_ext, fc, fd) = inp.surface_terms(i, m);
+                let d = dashpot[bn as usize];
+                let p = pred_f[i];
+                let f = [p[0] + d[0], p[1] + d[1]];
+                // the contact force as applied: the dashpots' estimate
+                // replaced by their forces
+                let fc = [fc[0] - fd[0] + d[0], fc[1] - fd[1] + d[1]];
+                advance(inp, i, m, [f, f_ext, fc, d], &mut xc[j], &mut vc[j], &mut acc);
+            }
+            part.merge(&acc);
         },
     );
+}
+
+impl NodeInputs<'_> {
+    /// `(1 − αΔt/2, 1 / (1 + αΔt/2))` of the velocity update.
+    fn damping_factors(&self) -> (f64, f64) {
+        let a = 0.5 * self.alpha * self.dt_avg;
+        (1.0 - a, 1.0 / (1.0 + a))
+    }
+
+    /// Node `i`'s (mass `m`) external force (gravity and surface loads),
+    /// contact force and that force's dashpot part (N).
+    #[inline]
+    fn surface_terms(&self, i: usize, m: f64) -> (Vec2, Vec2, Vec2) {
+        let bn = self.bnode[i];
+        let (fp, fc, fd) = if bn == NONE {
+            ([0.0; 2], [0.0; 2], [0.0; 2])
+        } else {
+            let b = bn as usize;
+            let zero = [0.0; 2];
+            (
+                self.pressure[b],
+                self.contact.get(b).copied().unwrap_or(zero),
+                self.contact_damping.get(b).copied().unwrap_or(zero),
+            )
+        };
+        ([m * self.gravity[0] + fp[0], m * self.gravity[1] + fp[1]], fc, fd)
+    }
+
+    /// Sets node `i`'s held velocity components to their prescribed values.
+    #[inline]
+    fn hold(&self, i: usize, v: &mut Vec2) {
+        let b = self.bc[i];
+        if b != NO_BC {
+            let con = &self.constraints[b as usize];
+            let amp = con.amplitude.map_or(1.0, |k| self.amplitude_values[k as usize]);
+            for d in 0..2 {
+                if con.fixed[d] {
+                    v[d] = con.value[d] * amp;
+                }
+            }
+        }
+    }
+}
+
+/// Moves node `i` (mass `m`) under the net force `f` of which `f_ext` is
+/// external, `fc` contact and `fd` that contact force's dashpot part (N,
+/// `[f, f_ext, fc, fd]`): its velocity `v` to `v^{n+½}`, its position `x`
+/// to `x^{n+1}`, and its work terms, largest speed and any non-finite value
+/// into `acc`.
+#[inline]
+fn advance(inp: &NodeInputs<'_>, i: usize, m: f64, forces: [Vec2; 4], x: &mut Vec2, v: &mut Vec2, acc: &mut NodePartial) {
+    let [f, f_ext, fc, fd] = forces;
+    let (keep, scale) = inp.damping_factors();
+    let v_old = *v;
+    let r = inp.dt_avg / m;
+    let mut v_new = [(keep * v_old[0] + r * f[0]) * scale, (keep * v_old[1] + r * f[1]) * scale];
+    let b = inp.bc[i];
+    let dxc =
+        |vn: Vec2| [0.5 * (inp.dt * vn[0] + inp.dt_prev * v_old[0]), 0.5 * (inp.dt * vn[1] + inp.dt_prev * v_old[1])];
+    if b != NO_BC {
+        inp.hold(i, &mut v_new);
+        // reaction R = m a + damping force − f on the held components
+        let con = &inp.constraints[b as usize];
+        let dx = dxc(v_new);
+        for d in 0..2 {
+            if con.fixed[d] {
+                let damp = inp.alpha * m * 0.5 * (v_old[d] + v_new[d]);
+                let reaction = m * (v_new[d] - v_old[d]) / inp.dt_avg + damp - f[d];
+                acc.support += reaction * dx[d];
+            }
+        }
+    }
+    let dx = dxc(v_new);
+    acc.external += f_ext[0] * dx[0] + f_ext[1] * dx[1];
+    acc.contact += fc[0] * dx[0] + fc[1] * dx[1];
+    acc.contact_damping += fd[0] * dx[0] + fd[1] * dx[1];
+    if inp.alpha > 0.0 {
+        let vm = [0.5 * (v_old[0] + v_new[0]), 0.5 * (v_old[1] + v_new[1])];
+        acc.damping += inp.alpha * m * (vm[0] * dx[0] + vm[1] * dx[1]);
+    }
+    x[0] += inp.dt * v_new[0];
+    x[1] += inp.dt * v_new[1];
+    *v = v_new;
+    let speed2 = v_new[0] * v_new[0] + v_new[1] * v_new[1];
+    // a NaN is kept (`max` would drop it)
+    if speed2 > acc.max_speed2 || speed2.is_nan() {
+        acc.max_speed2 = speed2;
+    }
+    if acc.bad_node.is_none() {
+        if !(v_new[0].is_finite() && v_new[1].is_finite()) {
+            acc.bad_node = Some((i as u32, "velocity"));
+        } else if !(x[0].is_finite() && x[1].is_finite()) {
+            acc.bad_node = Some((i as u32, "position"));
+        }
+    }
 }
 
 /// Read-only inputs of the element pass.

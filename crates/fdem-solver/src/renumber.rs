@@ -313,10 +313,12 @@ impl Simulation {
             p.bnodes = p.bnodes.map(|b| b_map[b as usize]);
         }
         scatter(&mut self.pressure_force, &b_map);
-        scatter(&mut self.contact_force, &b_map);
-        scatter(&mut self.contact_damping_force, &b_map);
         if let Some(c) = &mut self.contact {
             c.relabel(&surface, &facet_map, &b_map);
+            // the contact forces added up again in the new order, with the
+            // list of dashpots and their counts per node (the same forces
+            // up to the order of the sums)
+            c.reassemble(&mut self.contact_force, &mut self.contact_damping_force, &mut self.contact_damped);
         }
         self.surface = surface;
 

@@ -135,6 +135,15 @@ pub struct Simulation {
     pub(crate) contact_force: Vec<Vec2>,
     /// Their contact-dashpot parts (N), whose work is the contact damping.
     pub(crate) contact_damping_force: Vec<Vec2>,
+    /// Per boundary node: how many contact dashpots act on it (set by the
+    /// contact assembly; derived, not saved).
+    pub(crate) contact_damped: Vec<u16>,
+    /// Scratch of the node pass with dashpots: the dashpot forces per
+    /// boundary node (N), and per node the predicted velocity (m/s) and
+    /// net force without the dashpots (N).
+    pub(crate) dashpot_force: Vec<Vec2>,
+    pub(crate) pred_v: Vec<Vec2>,
+    pub(crate) pred_f: Vec<Vec2>,
     pub(crate) contact: Option<ContactModel>,
     pub(crate) fracture: Option<crate::fracture::FractureModel>,
     /// Excavation stages in time order, and the next one to run.
@@ -161,10 +170,10 @@ pub struct Simulation {
     pub(crate) held_seen: f64,
     pub(crate) node_partials: Vec<NodePartial>,
     pub(crate) elem_partials: Vec<ElementPartial>,
-    /// Per boundary node: its frequency with its contact springs and the
-    /// dashpot's factor ([`Simulation::contact_node_frequency`]) at the
-    /// last stable-step evaluation (scratch; sized by it).
-    pub(crate) contact_wr: Vec<Option<(f64, f64)>>,
+    /// Per boundary node: its frequency with its contact springs
+    /// ([`Simulation::contact_node_frequency`]) at the last stable-step
+    /// evaluation (scratch; sized by it).
+    pub(crate) contact_omega: Vec<Option<f64>>,
     /// Internal index ↔ id of nodes and elements (spatial renumbering).
     pub(crate) layout: crate::renumber::Layout,
     /// Worker threads; every public entry point that steps runs inside it
@@ -249,6 +258,7 @@ impl Simulation {
                 dt,
                 &mut self.contact_force,
                 &mut self.contact_damping_force,
+                &mut self.contact_damped,
             )
         });
         self.finish_surface_forces(contact);
@@ -355,13 +365,13 @@ impl Simulation {
             }
         });
         // the contact nodes' frequencies read the elements' just updated;
-        // each node's critical step is `2r/ω` (a minimum does not depend on
+        // each node's critical step is `2/ω` (a minimum does not depend on
         // the order, so the passes are parallel)
         let mut crit = element_crit;
         if let Some(contact) = &self.contact {
             let nb = self.surface.nodes.len();
-            let mut wr = std::mem::take(&mut self.contact_wr);
-            let step = |wr: &Option<(f64, f64)>| wr.map_or(f64::INFINITY, |(w, r)| 2.0 / w * r);
+            let mut wr = std::mem::take(&mut self.contact_omega);
+            let step = |w: &Option<f64>| w.map_or(f64::INFINITY, |w| 2.0 / w);
             let least = match nodes {
                 Some(list) if wr.len() == nb => {
                     for &v in list {
@@ -388,7 +398,7 @@ impl Simulation {
                     })
                 }
             };
-            self.contact_wr = wr;
+            self.contact_omega = wr;
             crit = crit.min(least);
         }
         pool.install(|| {
@@ -434,10 +444,12 @@ impl Simulation {
     }
 
     /// Boundary node `b`'s frequency with its contact springs, `ω =
-    /// √(ω_e² + ω_c²)`, and the factor `√(1 + ξ²) − ξ` by which the contact
-    /// dashpot (damping ratio ξ of the contact part) shortens its step; its
-    /// critical step is `2 · factor / ω`. `None` for a node without mass.
-    fn contact_node_frequency(&self, contact: &ContactModel, b: usize) -> Option<(f64, f64)> {
+    /// √(ω_e² + ω_c²)`; its critical step is `2 / ω`. `None` for a node
+    /// without mass. The contact dashpot does not shorten it: the node pass
+    /// takes each node's own dashpot part implicitly (on a node pressing a
+    /// node of equal mass, the trapezoidal rule), where an explicit dashpot
+    /// of damping ratio ξ cost the factor `√(1 + ξ²) − ξ` (docs/contact.md).
+    fn contact_node_frequency(&self, contact: &ContactModel, b: usize) -> Option<f64> {
         let node = self.surface.nodes[b] as usize;
         let m = self.nodes.mass[node];
         if m <= 0.0 {
@@ -449,9 +461,7 @@ impl Simulation {
         // frequency²: 2kℓ (1/m1 + 1/m2) ≤ 4kℓ/m at the lighter node, so
         // 4kℓ/m at each node covers all pairs
         let wc2 = 4.0 * contact.max_stiffness * self.surface.tributary_max(b) / m;
-        let w = (we * we + wc2).sqrt();
-        let xi = contact.max_damping * wc2.sqrt() / w;
-        Some((w, (1.0 + xi * xi).sqrt() - xi))
+        Some((we * we + wc2).sqrt())
     }
 
     /// Selective mass scaling (docs/mass_scaling.md): raises the density
@@ -460,9 +470,8 @@ impl Simulation {
     /// `target` (s, before the safety factor), by the factor that makes it
     /// meet `target` exactly. An element needs `ω_e ≤ W` with `W = 2 /
     /// √(T² + 2Tβ)` (the stiffness-damping-reduced bound solved for ω); a
-    /// contact node's frequency and dashpot factor scale uniformly when all
-    /// its elements' masses do, so it needs the factor `(ω T / 2r)²` on
-    /// them. Factors only grow. Once the run has started, a node whose mass
+    /// contact node's frequency scales as `1/√s` when all its elements'
+    /// masses grow by `s`, so it needs the factor `(ω T / 2)²` on them. Factors only grow. Once the run has started, a node whose mass
     /// grows keeps its momentum (its whole-step velocity drops by
     /// `m_old / m_new`), the reported work terms stay continuous, and the
     /// kinetic energy that this inelastic accretion takes is booked as
@@ -486,15 +495,14 @@ impl Simulation {
                 // the frequencies the step was just found from
                 // (`update_time_step_for` calls this right after
                 // `critical_step`)
-                debug_assert_eq!(self.contact_wr.len(), self.surface.nodes.len());
+                debug_assert_eq!(self.contact_omega.len(), self.surface.nodes.len());
                 let nodes: Vec<(usize, f64)> = self
-                    .contact_wr
+                    .contact_omega
                     .par_iter()
                     .enumerate()
                     .with_min_len(crate::CHUNK)
-                    .filter_map(|(b, &wr)| {
-                        let (w, r) = wr?;
-                        let s = (w * target / (2.0 * r)).powi(2);
+                    .filter_map(|(b, &w)| {
+                        let s = (w? * target / 2.0).powi(2);
                         (s > 1.0).then_some((b, s))
                     })
                     .collect();
@@ -565,7 +573,16 @@ impl Simulation {
         self.eval_amplitudes(self.time + 0.5 * dt);
         let clock = Instant::now();
         {
-            let Simulation { nodes, elems, node_partials, .. } = self;
+            let n = self.nodes.x.len();
+            if self.pred_v.len() != n {
+                // sized to the mesh: changes only with the topology
+                self.pred_v.resize(n, [0.0; 2]);
+                self.pred_f.resize(n, [0.0; 2]);
+            }
+            if self.dashpot_force.len() != self.contact_damped.len() {
+                self.dashpot_force.resize(self.contact_damped.len(), [0.0; 2]);
+            }
+            let Simulation { nodes, elems, node_partials, pred_v, pred_f, dashpot_force, contact, .. } = self;
             let inp = NodeInputs {
                 mass: &nodes.mass,
                 bnode: &self.surface.index_of,
@@ -583,7 +600,15 @@ impl Simulation {
                 dt,
                 dt_prev: self.dt_prev,
             };
-            passes::node_pass(&inp, &mut nodes.x, &mut nodes.v, node_partials);
+            // with contact dashpots in two stages: the damped nodes'
+            // predicted velocities, the dashpots on them, those nodes moved
+            let damped = &self.contact_damped[..];
+            passes::node_pass(&inp, &mut nodes.x, &mut nodes.v, node_partials, damped, pred_v, pred_f);
+            if let Some(c) = contact.as_mut().filter(|c| c.has_dashpots()) {
+                let h = dt_avg / (1.0 + 0.5 * self.settings.mass_damping * dt_avg);
+                c.dashpots(&self.surface.nodes, damped, &nodes.mass, pred_v, h, dashpot_force);
+                passes::node_pass_damped(&inp, &mut nodes.x, &mut nodes.v, node_partials, damped, pred_f, dashpot_force);
+            }
         }
         self.phase_times.nodes += clock.elapsed().as_secs_f64();
         self.time += dt;
@@ -624,7 +649,9 @@ impl Simulation {
         // depend on how the two interleave (their clocks overlap).
         let searched = self.contact.as_mut().map(|c| search_contact(c, &self.surface, &self.nodes, dt));
         let contact = {
-            let Simulation { nodes, elems, elem_partials, contact, contact_force, contact_damping_force, .. } = self;
+            let Simulation {
+                nodes, elems, elem_partials, contact, contact_force, contact_damping_force, contact_damped, ..
+            } = self;
             let inp = ElementInputs {
                 x: &nodes.x,
                 v: &nodes.v,
@@ -645,7 +672,7 @@ impl Simulation {
                 },
                 || {
                     let (c, clocks) = contact.as_mut().zip(searched)?;
-                    Some(assemble_contact(c, clocks, contact_force, contact_damping_force))
+                    Some(assemble_contact(c, clocks, contact_force, contact_damping_force, contact_damped))
                 },
             );
             self.phase_times.elements += elements;
@@ -837,9 +864,10 @@ fn evaluate_contact(
     dt: f64,
     force: &mut [Vec2],
     damping: &mut [Vec2],
+    damped: &mut [u16],
 ) -> ContactOutcome {
     let clocks = search_contact(contact, surface, nodes, dt);
-    assemble_contact(contact, clocks, force, damping)
+    assemble_contact(contact, clocks, force, damping, damped)
 }
 
 /// The first part of a contact evaluation (parallel): the broad phase
@@ -853,15 +881,16 @@ fn search_contact(contact: &mut ContactModel, surface: &Surface, nodes: &Nodes, 
     (broad_secs, clock.elapsed().as_secs_f64())
 }
 
-/// The second part (serial): the assembly into `force` and `damping`, with
-/// the clocks of the first.
+/// The second part (serial): the assembly into `force`, `damping` and the
+/// dashpot flags `damped`, with the clocks of the first.
 fn assemble_contact(
     contact: &mut ContactModel,
     (broad_secs, search_secs): (f64, f64),
     force: &mut [Vec2],
     damping: &mut [Vec2],
+    damped: &mut [u16],
 ) -> ContactOutcome {
     let clock = Instant::now();
-    let sum = contact.assemble(force, damping);
+    let sum = contact.assemble(force, damping, damped);
     ContactOutcome { sum, broad_secs, narrow_secs: search_secs + clock.elapsed().as_secs_f64() }
 }

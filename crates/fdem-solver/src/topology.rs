@@ -241,6 +241,8 @@ impl crate::simulation::Simulation {
             self.contact_force.resize(nb, [0.0; 2]);
             self.contact_damping_force.clear();
             self.contact_damping_force.resize(nb, [0.0; 2]);
+            self.contact_damped.clear();
+            self.contact_damped.resize(nb, 0);
         }
         self.surface = surface;
         self.node_partials.resize(n.div_ceil(crate::CHUNK), Default::default());

@@ -147,6 +147,31 @@ fn format4_len(m: usize) -> usize {
     1 + 4 + varint(m) + 1
 }
 
+/// Bytes of the format-6 block with `nb` boundary nodes under contact (0
+/// without contact): two lists of `nb` dashpots of four f64 each.
+fn format6_len(nb: usize) -> usize {
+    2 * (varint(nb) + 32 * nb)
+}
+
+/// The plate with contact on its own surface (a dashpot of damping ratio
+/// 0.1).
+fn plate_with_contact(n: usize) -> ModelSpec {
+    let mut spec = plate(n);
+    spec.contact = Some(ContactSpec {
+        laws: vec![InterfaceSpec {
+            normal_stiffness: 1e10,
+            shear_stiffness: 1e10,
+            friction: 0.5,
+            cohesion: 0.0,
+            damping_ratio: 0.1,
+        }],
+        facet_laws: Vec::new(),
+        crack_law: 0,
+        margin: None,
+    });
+    spec
+}
+
 #[test]
 fn a_format_1_file_still_reads_with_physical_masses() {
     // format 2 appends the mass-scaling block (density factors, setting,
@@ -159,8 +184,8 @@ fn a_format_1_file_still_reads_with_physical_masses() {
     let v3 = a.checkpoint_bytes(b"meta");
     let m = a.triangles().len();
     // postcard: varint length + m f64, `None` (one byte), one f64; two
-    // zero lengths; the format-4 block
-    let v1 = downgrade(&v3, 1, varint(m) + 8 * m + 1 + 8 + 2 + format4_len(m));
+    // zero lengths; the format-4 and format-6 blocks
+    let v1 = downgrade(&v3, 1, varint(m) + 8 * m + 1 + 8 + 2 + format4_len(m) + format6_len(0));
     let (mut b, user) = Simulation::from_checkpoint_bytes(&v1, 1).unwrap();
     assert_eq!(user, b"meta");
     assert!(b.mass_scale().iter().all(|&s| s == 1.0) && b.mass_scale().len() == m);
@@ -175,26 +200,13 @@ fn a_format_2_file_with_contact_reads_without_corner_contacts() {
     // the plate with contact on its own surface, before its first step:
     // every corner's second contact is empty, which is what a format-2
     // file restores with, so the two must continue identically
-    let mut spec = plate(6);
-    spec.contact = Some(ContactSpec {
-        laws: vec![InterfaceSpec {
-            normal_stiffness: 1e10,
-            shear_stiffness: 1e10,
-            friction: 0.5,
-            cohesion: 0.0,
-            damping_ratio: 0.1,
-        }],
-        facet_laws: Vec::new(),
-        crack_law: 0,
-        margin: None,
-    });
-    let mut a = Simulation::new(spec, 1).unwrap();
+    let mut a = Simulation::new(plate_with_contact(6), 1).unwrap();
     let v3 = a.checkpoint_bytes(b"");
     let nb = 4 * 6;
     // two lists of nb: an empty memory is 22 bytes (facet u32::MAX as a
     // 5-byte varint, two f64, `None`), an empty contact 70 (facet, 7 f64,
-    // a bool)
-    let v2 = downgrade(&v3, 2, 2 * varint(nb) + nb * (22 + 70) + format4_len(a.n_elements()));
+    // a bool); then the format-4 and format-6 blocks
+    let v2 = downgrade(&v3, 2, 2 * varint(nb) + nb * (22 + 70) + format4_len(a.n_elements()) + format6_len(nb));
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v2, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v3, "format 2 read back differs");
     a.step(20).unwrap();
@@ -230,12 +242,34 @@ fn a_format_4_file_keeps_its_crack_directions() {
     assert!(cracked > 10, "only {cracked} points softened");
     assert!(codes.iter().filter(|&&c| c != 0.0).count() >= cracked);
     // the same bytes marked as format 4: each code is read as an angle
-    let v5 = a.checkpoint_bytes(b"");
-    let v4 = downgrade(&v5, 4, 0);
+    let v6 = a.checkpoint_bytes(b"");
+    let v4 = downgrade(&v6, 4, format6_len(0));
     let (b, _) = Simulation::from_checkpoint_bytes(&v4, 1).unwrap();
     let pi = std::f64::consts::PI;
     for (e, s) in b.plastic_states().iter().enumerate() {
         let d = (s.crack_angle() - codes[e]).rem_euclid(pi);
         assert!(d.min(pi - d) < 1e-15, "element {e}: angle {} for {}", s.crack_angle(), codes[e]);
     }
+}
+
+#[test]
+fn a_format_5_file_reads_without_its_dashpots_and_a_format_6_file_with_them() {
+    // format 6 appends every contact's dashpot (normal, coefficient,
+    // spring force). Before the first step there is none, which is what a
+    // format-5 file restores with: the two continue identically; a
+    // format-6 file continues bit for bit on another thread count (with
+    // dashpots in contact: the caving case's resume test,
+    // tests/test_caving_resume.py).
+    let mut a = Simulation::new(plate_with_contact(6), 1).unwrap();
+    let v6 = a.checkpoint_bytes(b"");
+    let v5 = downgrade(&v6, 5, format6_len(4 * 6));
+    let (mut b, _) = Simulation::from_checkpoint_bytes(&v5, 1).unwrap();
+    assert!(b.checkpoint_bytes(b"") == v6, "format 5 read back differs");
+    a.step(40).unwrap();
+    b.step(40).unwrap();
+    assert!(a.checkpoint_bytes(b"") == b.checkpoint_bytes(b""));
+    let (mut c, _) = Simulation::from_checkpoint_bytes(&a.checkpoint_bytes(b""), 2).unwrap();
+    a.step(40).unwrap();
+    c.step(40).unwrap();
+    assert!(a.checkpoint_bytes(b"") == c.checkpoint_bytes(b""));
 }
