@@ -765,27 +765,52 @@ fn respond(
     }
 }
 
+/// One contact's dashpot as the node pass applies it ([`Dashpot`]): the
+/// node and the facet's ends, the weights, and the pair's shared inverse
+/// mass, gathered by [`assemble`] so that [`dashpot_forces`] reads one
+/// record and three velocities.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DashpotLink {
+    /// The node and the facet's two ends: mesh ids.
+    pub nodes: [u32; 3],
+    /// The same as boundary-node indices.
+    pub bnodes: [u32; 3],
+    /// Position `ξ` of the node's projection on the facet.
+    pub xi: f64,
+    /// The facet's outward unit normal.
+    pub normal: Vec2,
+    /// Dashpot coefficient `c` (N·s/m per metre of thickness).
+    pub coefficient: f64,
+    /// The spring's normal force (N/m): the most the dashpot may pull.
+    pub spring: f64,
+    /// `1/μ` with each node's mass shared among its dashpots (1/kg per
+    /// metre of thickness).
+    pub inverse_mass: f64,
+}
+
 /// Adds every contact force into `forces`, and the dashpot parts also into
 /// `damping` (one entry per boundary node, zeroed first), node by node in
 /// boundary-node order (a node's first contact, then its corner's second):
 /// deterministic. Counts in `damped` the dashpots that act on each boundary
 /// node (as the node, or as a facet end with a non-zero weight), and lists
-/// the contacts with a dashpot in `dashpots` (as `2b + k`, `k` = 0 for the
-/// first contact, 1 for the second), in the same order. Reads the contacts
-/// of the busy nodes only (`busy` as left by [`evaluate`]: a contact
-/// implies a memory).
+/// the contacts with a dashpot in `links`, in the same order, with their
+/// shared inverse masses from `mass` (by mesh id; `nodes` maps boundary
+/// index to mesh id). Reads the contacts of the busy nodes only (`busy` as
+/// left by [`evaluate`]: a contact implies a memory).
 pub fn assemble(
     contacts: [&[NodeContact]; 2],
     busy: &[u8],
     forces: &mut [Vec2],
     damping: &mut [Vec2],
     damped: &mut [u16],
-    dashpots: &mut Vec<u32>,
+    links: &mut Vec<DashpotLink>,
+    nodes: &[u32],
+    mass: &[f64],
 ) {
     forces.iter_mut().for_each(|f| *f = [0.0; 2]);
     damping.iter_mut().for_each(|f| *f = [0.0; 2]);
     damped.iter_mut().for_each(|d| *d = 0);
-    dashpots.clear();
+    links.clear();
     for (b, &flags) in busy.iter().enumerate() {
         if flags == 0 {
             continue;
@@ -803,8 +828,18 @@ pub fn assemble(
                     out[fb][d] -= c.xi * f[d];
                 }
             }
-            if c.dashpot.coefficient > 0.0 {
-                dashpots.push(2 * b as u32 + k as u32);
+            let d = &c.dashpot;
+            if d.coefficient > 0.0 {
+                let bnodes = [b as u32, c.ends[0], c.ends[1]];
+                links.push(DashpotLink {
+                    nodes: bnodes.map(|i| nodes[i as usize]),
+                    bnodes,
+                    xi: c.xi,
+                    normal: d.normal,
+                    coefficient: d.coefficient,
+                    spring: d.spring,
+                    inverse_mass: 0.0,
+                });
                 for (node, w) in [(b, 1.0), (fa, 1.0 - c.xi), (fb, c.xi)] {
                     if w > 0.0 {
                         damped[node] = damped[node].saturating_add(1);
@@ -813,66 +848,57 @@ pub fn assemble(
             }
         }
     }
+    share_masses(links, damped, mass);
 }
 
-/// The dashpot forces `force` (N/m along each contact's normal on its node,
-/// one per entry of `dashpots`, the list of [`assemble`]) from the
-/// predicted velocities `v` and the masses `mass` (by mesh id; `nodes` maps
-/// boundary index to mesh id), the dashpot counts `damped` of [`assemble`]
-/// (per boundary node) and the velocity step `h` (s): `f_d = max(−c ġᵉ /
-/// (1 + c h / μ), −f_s)` ([`Dashpot`]). In parallel; each contact reads
-/// three nodes.
-pub fn dashpot_forces(
-    contacts: [&[NodeContact]; 2],
-    dashpots: &[u32],
-    nodes: &[u32],
-    damped: &[u16],
-    mass: &[f64],
-    v: &[Vec2],
-    h: f64,
-    force: &mut [f64],
-) {
-    // each node's mass shared among the dashpots on it (a massless node
-    // moves with nothing: no term)
-    let share = |bi: usize, node: usize| {
-        let m = mass[node];
-        if m > 0.0 {
-            f64::from(damped[bi]) / m
-        } else {
-            0.0
-        }
-    };
-    force.par_iter_mut().zip(dashpots.par_iter()).with_min_len(CHUNK).for_each(|(out, &id)| {
-        let (b, k) = ((id / 2) as usize, (id % 2) as usize);
-        let c = &contacts[k][b];
-        let d = &c.dashpot;
-        let [ba, bb] = c.ends.map(|i| i as usize);
-        let (s, a, e) = (nodes[b] as usize, nodes[ba] as usize, nodes[bb] as usize);
-        let (vs, va, vb) = (v[s], v[a], v[e]);
-        let (wa, wb) = (1.0 - c.xi, c.xi);
-        let rel = [vs[0] - wa * va[0] - wb * vb[0], vs[1] - wa * va[1] - wb * vb[1]];
-        let rate = rel[0] * d.normal[0] + rel[1] * d.normal[1];
-        let inverse_mass = share(b, s) + wa * wa * share(ba, a) + wb * wb * share(bb, e);
-        let f = -d.coefficient * rate / (1.0 + d.coefficient * h * inverse_mass);
-        *out = f.max(-d.spring);
+/// Sets each link's [`DashpotLink::inverse_mass`] from the nodal masses
+/// `mass` (by mesh id) and the dashpot counts `damped` (per boundary node):
+/// each node's mass shared among the dashpots on it (a massless node moves
+/// with nothing: no term). [`assemble`] calls it; call it again when masses
+/// change before the next assembly (mass scaling).
+pub fn share_masses(links: &mut [DashpotLink], damped: &[u16], mass: &[f64]) {
+    for l in links.iter_mut() {
+        let w = [1.0, 1.0 - l.xi, l.xi];
+        l.inverse_mass = (0..3)
+            .map(|k| {
+                let m = mass[l.nodes[k] as usize];
+                if m > 0.0 {
+                    w[k] * w[k] * f64::from(damped[l.bnodes[k] as usize]) / m
+                } else {
+                    0.0
+                }
+            })
+            .sum();
+    }
+}
+
+/// The dashpot forces `force` (N/m along each link's normal on its node,
+/// one per link of [`assemble`]) from the predicted velocities `v` (by mesh
+/// id) and the velocity step `h` (s): `f_d = max(−c ġᵉ / (1 + c h / μ),
+/// −f_s)` ([`Dashpot`]). In parallel.
+pub fn dashpot_forces(links: &[DashpotLink], v: &[Vec2], h: f64, force: &mut [f64]) {
+    force.par_iter_mut().zip(links.par_iter()).with_min_len(CHUNK).for_each(|(out, l)| {
+        let [s, a, e] = l.nodes.map(|i| v[i as usize]);
+        let (wa, wb) = (1.0 - l.xi, l.xi);
+        let rel = [s[0] - wa * a[0] - wb * e[0], s[1] - wa * a[1] - wb * e[1]];
+        let rate = rel[0] * l.normal[0] + rel[1] * l.normal[1];
+        let f = -l.coefficient * rate / (1.0 + l.coefficient * h * l.inverse_mass);
+        *out = f.max(-l.spring);
     });
 }
 
 /// Adds the dashpot forces `force` of [`dashpot_forces`] into `out` (one
-/// entry per boundary node, zeroed first), in the order of `dashpots`:
+/// entry per boundary node, zeroed first), in the order of `links`:
 /// deterministic.
-pub fn assemble_dashpots(contacts: [&[NodeContact]; 2], dashpots: &[u32], force: &[f64], out: &mut [Vec2]) {
+pub fn assemble_dashpots(links: &[DashpotLink], force: &[f64], out: &mut [Vec2]) {
     out.iter_mut().for_each(|f| *f = [0.0; 2]);
-    for (&id, &fd) in dashpots.iter().zip(force) {
-        let (b, k) = ((id / 2) as usize, (id % 2) as usize);
-        let c = &contacts[k][b];
-        let n = c.dashpot.normal;
-        let f = [fd * n[0], fd * n[1]];
-        let [fa, fb] = c.ends.map(|i| i as usize);
+    for (l, &fd) in links.iter().zip(force) {
+        let f = [fd * l.normal[0], fd * l.normal[1]];
+        let [b, fa, fb] = l.bnodes.map(|i| i as usize);
         for d in 0..2 {
             out[b][d] += f[d];
-            out[fa][d] -= (1.0 - c.xi) * f[d];
-            out[fb][d] -= c.xi * f[d];
+            out[fa][d] -= (1.0 - l.xi) * f[d];
+            out[fb][d] -= l.xi * f[d];
         }
     }
 }
@@ -1019,10 +1045,13 @@ mod tests {
         busy[4] = 1; // a memory without a contact this step
         first[0].dashpot.coefficient = 0.0; // no dashpot
         let (mut forces, mut damping, mut dashpot_sum) = (vec![[9.0; 2]; nb], vec![[9.0; 2]; nb], vec![[9.0; 2]; nb]);
-        let (mut damped, mut list) = (vec![9; nb], vec![7]);
-        assemble([&first, &corner], &busy, &mut forces, &mut damping, &mut damped, &mut list);
-        let fd: Vec<f64> = (0..list.len()).map(|i| 0.5 + i as f64).collect();
-        assemble_dashpots([&first, &corner], &list, &fd, &mut dashpot_sum);
+        let (mut damped, mut links) = (vec![9; nb], vec![DashpotLink::default()]);
+        let nodes: Vec<u32> = (0..nb as u32).map(|b| 10 + b).collect();
+        let mass: Vec<f64> = (0..nb + 10).map(|i| 1.0 + i as f64).collect();
+        assemble([&first, &corner], &busy, &mut forces, &mut damping, &mut damped, &mut links, &nodes, &mass);
+        let fd: Vec<f64> = (0..links.len()).map(|i| 0.5 + i as f64).collect();
+        assemble_dashpots(&links, &fd, &mut dashpot_sum);
+        let list: Vec<u32> = links.iter().map(|l| l.bnodes[0]).collect();
         let (mut want_f, mut want_d, mut want_p) = (vec![[0.0; 2]; nb], vec![[0.0; 2]; nb], vec![[0.0; 2]; nb]);
         let (mut want_damped, mut want_list) = (vec![0u16; nb], Vec::new());
         for b in 0..nb {
@@ -1043,7 +1072,8 @@ mod tests {
                 // weight is not zero
                 if c.dashpot.coefficient > 0.0 {
                     let f = c.dashpot.normal.map(|n| fd[want_list.len()] * n);
-                    want_list.push(2 * b as u32 + k as u32);
+                    let _ = k;
+                    want_list.push(b as u32);
                     for d in 0..2 {
                         want_p[b][d] += f[d];
                         want_p[fa][d] -= (1.0 - c.xi) * f[d];
@@ -1055,8 +1085,17 @@ mod tests {
                 }
             }
         }
-        assert_eq!(list, [3, 6, 7, 10]);
+        assert_eq!(list, [1, 3, 3, 5]);
         assert_eq!(list, want_list);
+        // each link's shared inverse mass: Σ w² (dashpots on the node) / m
+        for l in &links {
+            let w = [1.0, 1.0 - l.xi, l.xi];
+            let want: f64 = (0..3)
+                .map(|k| w[k] * w[k] * f64::from(want_damped[l.bnodes[k] as usize]) / mass[l.nodes[k] as usize])
+                .sum();
+            assert_eq!(l.nodes, l.bnodes.map(|b| nodes[b as usize]));
+            assert!((l.inverse_mass - want).abs() <= 1e-15 * want, "{} against {want}", l.inverse_mass);
+        }
         assert_eq!(forces, want_f);
         assert_eq!(damping, want_d);
         assert_eq!(dashpot_sum, want_p);
@@ -1082,22 +1121,30 @@ mod tests {
         };
         let empty = NodeContact { facet: NONE, ..Default::default() };
         let contacts = [vec![c, empty, empty], vec![empty; 3]];
+        let busy = [1, 0, 0];
         let nodes = [0, 1, 2];
         let mass = [2.0, 1.0, 3.0];
         let inv_mu: f64 = 0.5 + 0.75 * 0.75 + 0.25 * 0.25 / 3.0;
-        let force = |v: [Vec2; 3], counts: [u16; 3]| {
+        let mut links = Vec::new();
+        let (mut fs, mut ds, mut damped) = (vec![[0.0; 2]; 3], vec![[0.0; 2]; 3], vec![0; 3]);
+        assemble([&contacts[0], &contacts[1]], &busy, &mut fs, &mut ds, &mut damped, &mut links, &nodes, &mass);
+        assert_eq!(damped, [1, 1, 1]);
+        let force = |v: [Vec2; 3], share: f64| {
             let mut f = [0.0];
-            dashpot_forces([&contacts[0], &contacts[1]], &[0], &nodes, &counts, &mass, &v, 0.1, &mut f);
+            let mut l = links.clone();
+            l[0].inverse_mass *= share;
+            dashpot_forces(&l, &v, 0.1, &mut f);
             f[0]
         };
-        let f = force([[0.0, -1.0], [0.0, 0.0], [0.0, 0.0]], [1, 1, 1]);
+        let f = force([[0.0, -1.0], [0.0, 0.0], [0.0, 0.0]], 1.0);
         assert!((f - 4.0 / (1.0 + 0.4 * inv_mu)).abs() < 1e-15, "{f}");
         // the backward-Euler property: the impulse h f brings the gap rate
         // to −1 + h f / μ, and f = −c times that
         assert!((f + 4.0 * (-1.0 + 0.1 * f * inv_mu)).abs() < 1e-12);
-        assert_eq!(force([[0.3, 2.0]; 3], [1, 1, 1]), 0.0);
-        assert_eq!(force([[0.0, 1.0], [0.0, 0.0], [0.0, 0.0]], [1, 1, 1]), -0.5);
-        let shared = force([[0.0, -1.0], [0.0, 0.0], [0.0, 0.0]], [2, 2, 2]);
+        assert_eq!(force([[0.3, 2.0]; 3], 1.0), 0.0);
+        assert_eq!(force([[0.0, 1.0], [0.0, 0.0], [0.0, 0.0]], 1.0), -0.5);
+        // two dashpots on every node: as assembled, 1/μ doubles
+        let shared = force([[0.0, -1.0], [0.0, 0.0], [0.0, 0.0]], 2.0);
         assert!((shared - 4.0 / (1.0 + 0.8 * inv_mu)).abs() < 1e-15);
     }
 

@@ -435,7 +435,12 @@ impl Simulation {
             // the assembly again, which also finds the damped nodes (the
             // same forces, in the same order, as the saved ones)
             sim.contact_damped = vec![0; sim.contact_force.len()];
-            c.reassemble(&mut sim.contact_force, &mut sim.contact_damping_force, &mut sim.contact_damped);
+            let out = crate::contact::AssemblyOut {
+                forces: &mut sim.contact_force,
+                damping: &mut sim.contact_damping_force,
+                damped: &mut sim.contact_damped,
+            };
+            c.reassemble(out, &sim.surface, &sim.nodes.mass);
         }
         Ok((sim, user.to_vec()))
     }

@@ -12,6 +12,15 @@ use crate::error::SetupError;
 use crate::model::ContactSpec;
 use crate::NONE;
 
+/// Where [`ContactModel::assemble`] writes, per boundary node: the contact
+/// forces (N), their dashpot parts (N), and how many dashpots act on the
+/// node.
+pub(crate) struct AssemblyOut<'a> {
+    pub forces: &'a mut [Vec2],
+    pub damping: &'a mut [Vec2],
+    pub damped: &'a mut [u16],
+}
+
 /// Contact state and settings owned by the simulation.
 #[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct ContactModel {
@@ -47,11 +56,11 @@ pub(crate) struct ContactModel {
     /// Per facet: its frame at the current evaluation (scratch).
     #[serde(skip)]
     frames: Vec<FacetFrame>,
-    /// The contacts with a dashpot, as `2b + k`, in the assembly's order,
-    /// and their dashpot forces of the node pass (scratch, set by
+    /// The contacts with a dashpot in the assembly's order, and their
+    /// dashpot forces of the node pass (scratch, set by
     /// [`ContactModel::assemble`] and [`ContactModel::dashpots`]).
     #[serde(skip)]
-    dashpot_list: Vec<u32>,
+    dashpot_links: Vec<narrow::DashpotLink>,
     #[serde(skip)]
     dashpot_force: Vec<f64>,
     /// Candidate pairs evaluated so far.
@@ -87,7 +96,7 @@ impl ContactModel {
         // at most two contacts a node: filled by every assembly without
         // growing
         let most = 2 * surface.nodes.len();
-        self.dashpot_list.reserve(most.saturating_sub(self.dashpot_list.len()));
+        self.dashpot_links.reserve(most.saturating_sub(self.dashpot_links.len()));
         self.dashpot_force.reserve(most.saturating_sub(self.dashpot_force.len()));
     }
 
@@ -172,7 +181,7 @@ impl ContactModel {
             spare_out: Default::default(),
             partials: Vec::new(),
             frames: Vec::new(),
-            dashpot_list: Vec::new(),
+            dashpot_links: Vec::new(),
             dashpot_force: Vec::new(),
             pairs_evaluated: 0,
             max_stiffness,
@@ -356,10 +365,10 @@ impl ContactModel {
     /// The assembly (serial, in boundary-node order) after
     /// [`ContactModel::search`]: the forces into `forces` (per boundary
     /// node), their dashpot parts into `damping`, and how many dashpots act
-    /// on each boundary node into `damped` ([`narrow::assemble`]); returns
-    /// the summed partials.
-    pub fn assemble(&mut self, forces: &mut [Vec2], damping: &mut [Vec2], damped: &mut [u16]) -> ContactPartial {
-        narrow::assemble([&self.out, &self.corner_out], &self.busy, forces, damping, damped, &mut self.dashpot_list);
+    /// on each boundary node into `damped` ([`narrow::assemble`]; `mass`
+    /// the nodal masses, for the dashpots); returns the summed partials.
+    pub fn assemble(&mut self, out: AssemblyOut<'_>, surface: &Surface, mass: &[f64]) -> ContactPartial {
+        self.reassemble(out, surface, mass);
         let mut sum = ContactPartial::default();
         for p in &self.partials {
             sum.pairs += p.pairs;
@@ -371,26 +380,35 @@ impl ContactModel {
         sum
     }
 
-    /// [`ContactModel::assemble`] again without counting the pairs: after a
-    /// restore, for the damped nodes (the forces come out as saved).
-    pub fn reassemble(&mut self, forces: &mut [Vec2], damping: &mut [Vec2], damped: &mut [u16]) {
-        narrow::assemble([&self.out, &self.corner_out], &self.busy, forces, damping, damped, &mut self.dashpot_list);
+    /// [`ContactModel::assemble`] without counting the pairs: after a
+    /// restore or a renumbering, for the dashpots (the forces come out as
+    /// saved, up to the order of the sums).
+    pub fn reassemble(&mut self, out: AssemblyOut<'_>, surface: &Surface, mass: &[f64]) {
+        let AssemblyOut { forces, damping, damped } = out;
+        let contacts = [&self.out[..], &self.corner_out[..]];
+        let links = &mut self.dashpot_links;
+        narrow::assemble(contacts, &self.busy, forces, damping, damped, links, &surface.nodes, mass);
+    }
+
+    /// The dashpots' shared inverse masses again from `mass`, with the
+    /// counts `damped` of the last assembly: after masses changed
+    /// (mass scaling) before the next assembly.
+    pub fn share_masses(&mut self, damped: &[u16], mass: &[f64]) {
+        narrow::share_masses(&mut self.dashpot_links, damped, mass);
     }
 
     /// Whether the last assembly found a contact with a dashpot.
     pub fn has_dashpots(&self) -> bool {
-        !self.dashpot_list.is_empty()
+        !self.dashpot_links.is_empty()
     }
 
     /// The dashpot forces of the node pass ([`narrow::Dashpot`]): each
-    /// contact's from the predicted velocities `v` and the masses `mass` (by
-    /// node; `nodes` maps boundary index to node, `damped` counts the
-    /// dashpots per boundary node) with the velocity step `h` (s), then
-    /// added up per boundary node into `out` (N), in the assembly's order.
-    pub fn dashpots(&mut self, nodes: &[u32], damped: &[u16], mass: &[f64], v: &[Vec2], h: f64, out: &mut [Vec2]) {
-        let contacts = [&self.out[..], &self.corner_out[..]];
-        self.dashpot_force.resize(self.dashpot_list.len(), 0.0);
-        narrow::dashpot_forces(contacts, &self.dashpot_list, nodes, damped, mass, v, h, &mut self.dashpot_force);
-        narrow::assemble_dashpots(contacts, &self.dashpot_list, &self.dashpot_force, out);
+    /// contact's from the predicted velocities `v` (by node) with the
+    /// velocity step `h` (s), then added up per boundary node into `out`
+    /// (N), in the assembly's order.
+    pub fn dashpots(&mut self, v: &[Vec2], h: f64, out: &mut [Vec2]) {
+        self.dashpot_force.resize(self.dashpot_links.len(), 0.0);
+        narrow::dashpot_forces(&self.dashpot_links, v, h, &mut self.dashpot_force);
+        narrow::assemble_dashpots(&self.dashpot_links, &self.dashpot_force, out);
     }
 }

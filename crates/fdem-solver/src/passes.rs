@@ -210,7 +210,15 @@ impl NodeInputs<'_> {
 /// to `x^{n+1}`, and its work terms, largest speed and any non-finite value
 /// into `acc`.
 #[inline]
-fn advance(inp: &NodeInputs<'_>, i: usize, m: f64, forces: [Vec2; 4], x: &mut Vec2, v: &mut Vec2, acc: &mut NodePartial) {
+fn advance(
+    inp: &NodeInputs<'_>,
+    i: usize,
+    m: f64,
+    forces: [Vec2; 4],
+    x: &mut Vec2,
+    v: &mut Vec2,
+    acc: &mut NodePartial,
+) {
     let [f, f_ext, fc, fd] = forces;
     let (keep, scale) = inp.damping_factors();
     let v_old = *v;

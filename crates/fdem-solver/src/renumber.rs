@@ -318,7 +318,12 @@ impl Simulation {
             // the contact forces added up again in the new order, with the
             // list of dashpots and their counts per node (the same forces
             // up to the order of the sums)
-            c.reassemble(&mut self.contact_force, &mut self.contact_damping_force, &mut self.contact_damped);
+            let out = crate::contact::AssemblyOut {
+                forces: &mut self.contact_force,
+                damping: &mut self.contact_damping_force,
+                damped: &mut self.contact_damped,
+            };
+            c.reassemble(out, &surface, &self.nodes.mass);
         }
         self.surface = surface;
 

@@ -11,7 +11,7 @@ use fdem_element::{ReferenceShape, Vec2};
 use fdem_material::PlasticState;
 use fdem_mesh::Csr;
 
-use crate::contact::ContactModel;
+use crate::contact::{AssemblyOut, ContactModel};
 use crate::energy::{ElementPartial, Energies, NodePartial};
 use crate::error::{RunError, SetupError};
 use crate::loads::{Amplitude, Constraint, PressureLoad};
@@ -251,15 +251,12 @@ impl Simulation {
     /// step just taken (for the tangential slip increment).
     fn surface_forces(&mut self, dt: f64) {
         let contact = self.contact.as_mut().map(|c| {
-            evaluate_contact(
-                c,
-                &self.surface,
-                &self.nodes,
-                dt,
-                &mut self.contact_force,
-                &mut self.contact_damping_force,
-                &mut self.contact_damped,
-            )
+            let out = AssemblyOut {
+                forces: &mut self.contact_force,
+                damping: &mut self.contact_damping_force,
+                damped: &mut self.contact_damped,
+            };
+            evaluate_contact(c, &self.surface, &self.nodes, dt, out)
         });
         self.finish_surface_forces(contact);
     }
@@ -557,6 +554,11 @@ impl Simulation {
             acc.contact_damping += before[5] - after[5];
             acc.mass_scaling += before[0] - after[0];
         }
+        // the dashpots were sized with the masses before (a restore shares
+        // the masses saved, so the two must agree)
+        if let Some(c) = self.contact.as_mut() {
+            c.share_masses(&self.contact_damped, &self.nodes.mass);
+        }
         need.into_iter().map(|(e, _)| e).collect()
     }
 
@@ -606,8 +608,16 @@ impl Simulation {
             passes::node_pass(&inp, &mut nodes.x, &mut nodes.v, node_partials, damped, pred_v, pred_f);
             if let Some(c) = contact.as_mut().filter(|c| c.has_dashpots()) {
                 let h = dt_avg / (1.0 + 0.5 * self.settings.mass_damping * dt_avg);
-                c.dashpots(&self.surface.nodes, damped, &nodes.mass, pred_v, h, dashpot_force);
-                passes::node_pass_damped(&inp, &mut nodes.x, &mut nodes.v, node_partials, damped, pred_f, dashpot_force);
+                c.dashpots(pred_v, h, dashpot_force);
+                passes::node_pass_damped(
+                    &inp,
+                    &mut nodes.x,
+                    &mut nodes.v,
+                    node_partials,
+                    damped,
+                    pred_f,
+                    dashpot_force,
+                );
             }
         }
         self.phase_times.nodes += clock.elapsed().as_secs_f64();
@@ -650,7 +660,14 @@ impl Simulation {
         let searched = self.contact.as_mut().map(|c| search_contact(c, &self.surface, &self.nodes, dt));
         let contact = {
             let Simulation {
-                nodes, elems, elem_partials, contact, contact_force, contact_damping_force, contact_damped, ..
+                nodes,
+                elems,
+                elem_partials,
+                contact,
+                contact_force,
+                contact_damping_force,
+                contact_damped,
+                ..
             } = self;
             let inp = ElementInputs {
                 x: &nodes.x,
@@ -664,6 +681,7 @@ impl Simulation {
                 dt,
                 plastic: !self.elastic_stage,
             };
+            let (surface, mass) = (&self.surface, &nodes.mass);
             let (elements, contact) = rayon::join(
                 || {
                     let clock = Instant::now();
@@ -672,7 +690,9 @@ impl Simulation {
                 },
                 || {
                     let (c, clocks) = contact.as_mut().zip(searched)?;
-                    Some(assemble_contact(c, clocks, contact_force, contact_damping_force, contact_damped))
+                    let out =
+                        AssemblyOut { forces: contact_force, damping: contact_damping_force, damped: contact_damped };
+                    Some(assemble_contact(c, clocks, out, surface, mass))
                 },
             );
             self.phase_times.elements += elements;
@@ -862,12 +882,10 @@ fn evaluate_contact(
     surface: &Surface,
     nodes: &Nodes,
     dt: f64,
-    force: &mut [Vec2],
-    damping: &mut [Vec2],
-    damped: &mut [u16],
+    out: AssemblyOut<'_>,
 ) -> ContactOutcome {
     let clocks = search_contact(contact, surface, nodes, dt);
-    assemble_contact(contact, clocks, force, damping, damped)
+    assemble_contact(contact, clocks, out, surface, &nodes.mass)
 }
 
 /// The first part of a contact evaluation (parallel): the broad phase
@@ -881,16 +899,16 @@ fn search_contact(contact: &mut ContactModel, surface: &Surface, nodes: &Nodes, 
     (broad_secs, clock.elapsed().as_secs_f64())
 }
 
-/// The second part (serial): the assembly into `force`, `damping` and the
-/// dashpot flags `damped`, with the clocks of the first.
+/// The second part (serial): the assembly into `out`, with the clocks of
+/// the first.
 fn assemble_contact(
     contact: &mut ContactModel,
     (broad_secs, search_secs): (f64, f64),
-    force: &mut [Vec2],
-    damping: &mut [Vec2],
-    damped: &mut [u16],
+    out: AssemblyOut<'_>,
+    surface: &Surface,
+    mass: &[f64],
 ) -> ContactOutcome {
     let clock = Instant::now();
-    let sum = contact.assemble(force, damping, damped);
+    let sum = contact.assemble(out, surface, mass);
     ContactOutcome { sum, broad_secs, narrow_secs: search_secs + clock.elapsed().as_secs_f64() }
 }
