@@ -765,27 +765,22 @@ fn respond(
     }
 }
 
-/// One contact's dashpot as the node pass applies it ([`Dashpot`]): the
-/// node and the facet's ends, the weights, and the pair's shared inverse
-/// mass, gathered by [`assemble`] so that [`dashpot_forces`] reads one
-/// record and three velocities.
+/// One contact's dashpot as the node pass applies it ([`Dashpot`]),
+/// gathered by [`dashpot_forces`] (in parallel) so that
+/// [`assemble_dashpots`] (sequential) reads one record per dashpot.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DashpotLink {
-    /// The node and the facet's two ends: mesh ids.
-    pub nodes: [u32; 3],
-    /// The same as boundary-node indices.
+    /// The node and the facet's two ends as boundary-node indices.
     pub bnodes: [u32; 3],
     /// Position `ξ` of the node's projection on the facet.
     pub xi: f64,
     /// The facet's outward unit normal.
     pub normal: Vec2,
-    /// Dashpot coefficient `c` (N·s/m per metre of thickness).
-    pub coefficient: f64,
-    /// The spring's normal force (N/m): the most the dashpot may pull.
-    pub spring: f64,
     /// `1/μ` with each node's mass shared among its dashpots (1/kg per
     /// metre of thickness).
     pub inverse_mass: f64,
+    /// The dashpot's normal force on the node (N/m, along `normal`).
+    pub force: f64,
 }
 
 /// Adds every contact force into `forces`, and the dashpot parts also into
@@ -793,24 +788,22 @@ pub struct DashpotLink {
 /// boundary-node order (a node's first contact, then its corner's second):
 /// deterministic. Counts in `damped` the dashpots that act on each boundary
 /// node (as the node, or as a facet end with a non-zero weight), and lists
-/// the contacts with a dashpot in `links`, in the same order, with their
-/// shared inverse masses from `mass` (by mesh id; `nodes` maps boundary
-/// index to mesh id). Reads the contacts of the busy nodes only (`busy` as
-/// left by [`evaluate`]: a contact implies a memory).
+/// the contacts with a dashpot in `dashpots` (as `2b + k`, `k` = 0 for the
+/// first contact, 1 for the second), in the same order. Reads the contacts
+/// of the busy nodes only (`busy` as left by [`evaluate`]: a contact
+/// implies a memory).
 pub fn assemble(
     contacts: [&[NodeContact]; 2],
     busy: &[u8],
     forces: &mut [Vec2],
     damping: &mut [Vec2],
     damped: &mut [u16],
-    links: &mut Vec<DashpotLink>,
-    nodes: &[u32],
-    mass: &[f64],
+    dashpots: &mut Vec<u32>,
 ) {
     forces.iter_mut().for_each(|f| *f = [0.0; 2]);
     damping.iter_mut().for_each(|f| *f = [0.0; 2]);
     damped.iter_mut().for_each(|d| *d = 0);
-    links.clear();
+    dashpots.clear();
     for (b, &flags) in busy.iter().enumerate() {
         if flags == 0 {
             continue;
@@ -828,18 +821,8 @@ pub fn assemble(
                     out[fb][d] -= c.xi * f[d];
                 }
             }
-            let d = &c.dashpot;
-            if d.coefficient > 0.0 {
-                let bnodes = [b as u32, c.ends[0], c.ends[1]];
-                links.push(DashpotLink {
-                    nodes: bnodes.map(|i| nodes[i as usize]),
-                    bnodes,
-                    xi: c.xi,
-                    normal: d.normal,
-                    coefficient: d.coefficient,
-                    spring: d.spring,
-                    inverse_mass: 0.0,
-                });
+            if c.dashpot.coefficient > 0.0 {
+                dashpots.push(2 * b as u32 + k as u32);
                 for (node, w) in [(b, 1.0), (fa, 1.0 - c.xi), (fb, c.xi)] {
                     if w > 0.0 {
                         damped[node] = damped[node].saturating_add(1);
@@ -848,52 +831,54 @@ pub fn assemble(
             }
         }
     }
-    share_masses(links, damped, mass);
 }
 
-/// Sets each link's [`DashpotLink::inverse_mass`] from the nodal masses
-/// `mass` (by mesh id) and the dashpot counts `damped` (per boundary node):
-/// each node's mass shared among the dashpots on it (a massless node moves
-/// with nothing: no term). [`assemble`] calls it; call it again when masses
-/// change before the next assembly (mass scaling).
-pub fn share_masses(links: &mut [DashpotLink], damped: &[u16], mass: &[f64]) {
-    for l in links.iter_mut() {
-        let w = [1.0, 1.0 - l.xi, l.xi];
-        l.inverse_mass = (0..3)
-            .map(|k| {
-                let m = mass[l.nodes[k] as usize];
-                if m > 0.0 {
-                    w[k] * w[k] * f64::from(damped[l.bnodes[k] as usize]) / m
-                } else {
-                    0.0
-                }
-            })
-            .sum();
-    }
-}
-
-/// The dashpot forces `force` (N/m along each link's normal on its node,
-/// one per link of [`assemble`]) from the predicted velocities `v` (by mesh
-/// id) and the velocity step `h` (s): `f_d = max(−c ġᵉ / (1 + c h / μ),
-/// −f_s)` ([`Dashpot`]). In parallel.
-pub fn dashpot_forces(links: &[DashpotLink], v: &[Vec2], h: f64, force: &mut [f64]) {
-    force.par_iter_mut().zip(links.par_iter()).with_min_len(CHUNK).for_each(|(out, l)| {
-        let [s, a, e] = l.nodes.map(|i| v[i as usize]);
-        let (wa, wb) = (1.0 - l.xi, l.xi);
-        let rel = [s[0] - wa * a[0] - wb * e[0], s[1] - wa * a[1] - wb * e[1]];
-        let rate = rel[0] * l.normal[0] + rel[1] * l.normal[1];
-        let f = -l.coefficient * rate / (1.0 + l.coefficient * h * l.inverse_mass);
-        *out = f.max(-l.spring);
+/// Each listed contact's dashpot force into `links` (one per entry of
+/// `dashpots`, the list of [`assemble`]), from the predicted velocities `v`
+/// and the masses `mass` (by mesh id; `nodes` maps boundary index to mesh
+/// id), the dashpot counts `damped` of [`assemble`] (per boundary node) and
+/// the velocity step `h` (s): `f_d = max(−c ġᵉ / (1 + c h / μ), −f_s)`
+/// ([`Dashpot`]), each node's mass shared among the dashpots on it (a
+/// massless node moves with nothing: no term). In parallel.
+pub fn dashpot_forces(
+    contacts: [&[NodeContact]; 2],
+    dashpots: &[u32],
+    nodes: &[u32],
+    damped: &[u16],
+    mass: &[f64],
+    v: &[Vec2],
+    h: f64,
+    links: &mut [DashpotLink],
+) {
+    links.par_iter_mut().zip(dashpots.par_iter()).with_min_len(CHUNK).for_each(|(link, &id)| {
+        let (b, k) = ((id / 2) as usize, (id % 2) as usize);
+        let c = &contacts[k][b];
+        let d = &c.dashpot;
+        let bnodes = [b as u32, c.ends[0], c.ends[1]];
+        let w = [1.0, 1.0 - c.xi, c.xi];
+        let (mut rel, mut inverse_mass) = ([0.0; 2], 0.0);
+        for j in 0..3 {
+            let node = nodes[bnodes[j] as usize] as usize;
+            let sign = if j == 0 { 1.0 } else { -1.0 };
+            rel[0] += sign * w[j] * v[node][0];
+            rel[1] += sign * w[j] * v[node][1];
+            let m = mass[node];
+            if m > 0.0 {
+                inverse_mass += w[j] * w[j] * f64::from(damped[bnodes[j] as usize]) / m;
+            }
+        }
+        let rate = rel[0] * d.normal[0] + rel[1] * d.normal[1];
+        let f = -d.coefficient * rate / (1.0 + d.coefficient * h * inverse_mass);
+        *link = DashpotLink { bnodes, xi: c.xi, normal: d.normal, inverse_mass, force: f.max(-d.spring) };
     });
 }
 
-/// Adds the dashpot forces `force` of [`dashpot_forces`] into `out` (one
-/// entry per boundary node, zeroed first), in the order of `links`:
-/// deterministic.
-pub fn assemble_dashpots(links: &[DashpotLink], force: &[f64], out: &mut [Vec2]) {
+/// Adds the dashpot forces of `links` ([`dashpot_forces`]) into `out` (one
+/// entry per boundary node, zeroed first), in their order: deterministic.
+pub fn assemble_dashpots(links: &[DashpotLink], out: &mut [Vec2]) {
     out.iter_mut().for_each(|f| *f = [0.0; 2]);
-    for (l, &fd) in links.iter().zip(force) {
-        let f = [fd * l.normal[0], fd * l.normal[1]];
+    for l in links {
+        let f = [l.force * l.normal[0], l.force * l.normal[1]];
         let [b, fa, fb] = l.bnodes.map(|i| i as usize);
         for d in 0..2 {
             out[b][d] += f[d];
@@ -1045,12 +1030,16 @@ mod tests {
         busy[4] = 1; // a memory without a contact this step
         first[0].dashpot.coefficient = 0.0; // no dashpot
         let (mut forces, mut damping, mut dashpot_sum) = (vec![[9.0; 2]; nb], vec![[9.0; 2]; nb], vec![[9.0; 2]; nb]);
-        let (mut damped, mut links) = (vec![9; nb], vec![DashpotLink::default()]);
+        let (mut damped, mut ids) = (vec![9; nb], vec![7]);
+        assemble([&first, &corner], &busy, &mut forces, &mut damping, &mut damped, &mut ids);
         let nodes: Vec<u32> = (0..nb as u32).map(|b| 10 + b).collect();
         let mass: Vec<f64> = (0..nb + 10).map(|i| 1.0 + i as f64).collect();
-        assemble([&first, &corner], &busy, &mut forces, &mut damping, &mut damped, &mut links, &nodes, &mass);
+        let v = vec![[0.0; 2]; nb + 10];
+        let mut links = vec![DashpotLink::default(); ids.len()];
+        dashpot_forces([&first, &corner], &ids, &nodes, &damped, &mass, &v, 0.1, &mut links);
         let fd: Vec<f64> = (0..links.len()).map(|i| 0.5 + i as f64).collect();
-        assemble_dashpots(&links, &fd, &mut dashpot_sum);
+        links.iter_mut().zip(&fd).for_each(|(l, &f)| l.force = f);
+        assemble_dashpots(&links, &mut dashpot_sum);
         let list: Vec<u32> = links.iter().map(|l| l.bnodes[0]).collect();
         let (mut want_f, mut want_d, mut want_p) = (vec![[0.0; 2]; nb], vec![[0.0; 2]; nb], vec![[0.0; 2]; nb]);
         let (mut want_damped, mut want_list) = (vec![0u16; nb], Vec::new());
@@ -1085,15 +1074,18 @@ mod tests {
                 }
             }
         }
+        assert_eq!(ids, [3, 6, 7, 10]);
         assert_eq!(list, [1, 3, 3, 5]);
         assert_eq!(list, want_list);
         // each link's shared inverse mass: Σ w² (dashpots on the node) / m
         for l in &links {
             let w = [1.0, 1.0 - l.xi, l.xi];
             let want: f64 = (0..3)
-                .map(|k| w[k] * w[k] * f64::from(want_damped[l.bnodes[k] as usize]) / mass[l.nodes[k] as usize])
+                .map(|k| {
+                    let b = l.bnodes[k] as usize;
+                    w[k] * w[k] * f64::from(want_damped[b]) / mass[nodes[b] as usize]
+                })
                 .sum();
-            assert_eq!(l.nodes, l.bnodes.map(|b| nodes[b as usize]));
             assert!((l.inverse_mass - want).abs() <= 1e-15 * want, "{} against {want}", l.inverse_mass);
         }
         assert_eq!(forces, want_f);
@@ -1125,26 +1117,25 @@ mod tests {
         let nodes = [0, 1, 2];
         let mass = [2.0, 1.0, 3.0];
         let inv_mu: f64 = 0.5 + 0.75 * 0.75 + 0.25 * 0.25 / 3.0;
-        let mut links = Vec::new();
+        let mut ids = Vec::new();
         let (mut fs, mut ds, mut damped) = (vec![[0.0; 2]; 3], vec![[0.0; 2]; 3], vec![0; 3]);
-        assemble([&contacts[0], &contacts[1]], &busy, &mut fs, &mut ds, &mut damped, &mut links, &nodes, &mass);
+        assemble([&contacts[0], &contacts[1]], &busy, &mut fs, &mut ds, &mut damped, &mut ids);
         assert_eq!(damped, [1, 1, 1]);
-        let force = |v: [Vec2; 3], share: f64| {
-            let mut f = [0.0];
-            let mut l = links.clone();
-            l[0].inverse_mass *= share;
-            dashpot_forces(&l, &v, 0.1, &mut f);
-            f[0]
+        let force = |v: [Vec2; 3], share: u16| {
+            let mut l = [DashpotLink::default()];
+            let counts = [share; 3];
+            dashpot_forces([&contacts[0], &contacts[1]], &ids, &nodes, &counts, &mass, &v, 0.1, &mut l);
+            l[0].force
         };
-        let f = force([[0.0, -1.0], [0.0, 0.0], [0.0, 0.0]], 1.0);
+        let f = force([[0.0, -1.0], [0.0, 0.0], [0.0, 0.0]], 1);
         assert!((f - 4.0 / (1.0 + 0.4 * inv_mu)).abs() < 1e-15, "{f}");
         // the backward-Euler property: the impulse h f brings the gap rate
         // to −1 + h f / μ, and f = −c times that
         assert!((f + 4.0 * (-1.0 + 0.1 * f * inv_mu)).abs() < 1e-12);
-        assert_eq!(force([[0.3, 2.0]; 3], 1.0), 0.0);
-        assert_eq!(force([[0.0, 1.0], [0.0, 0.0], [0.0, 0.0]], 1.0), -0.5);
-        // two dashpots on every node: as assembled, 1/μ doubles
-        let shared = force([[0.0, -1.0], [0.0, 0.0], [0.0, 0.0]], 2.0);
+        assert_eq!(force([[0.3, 2.0]; 3], 1), 0.0);
+        assert_eq!(force([[0.0, 1.0], [0.0, 0.0], [0.0, 0.0]], 1), -0.5);
+        // two dashpots on every node: 1/μ doubles
+        let shared = force([[0.0, -1.0], [0.0, 0.0], [0.0, 0.0]], 2);
         assert!((shared - 4.0 / (1.0 + 0.8 * inv_mu)).abs() < 1e-15);
     }
 

@@ -440,7 +440,7 @@ impl Simulation {
                 damping: &mut sim.contact_damping_force,
                 damped: &mut sim.contact_damped,
             };
-            c.reassemble(out, &sim.surface, &sim.nodes.mass);
+            c.reassemble(out);
         }
         Ok((sim, user.to_vec()))
     }

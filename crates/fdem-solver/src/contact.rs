@@ -56,13 +56,13 @@ pub(crate) struct ContactModel {
     /// Per facet: its frame at the current evaluation (scratch).
     #[serde(skip)]
     frames: Vec<FacetFrame>,
-    /// The contacts with a dashpot in the assembly's order, and their
-    /// dashpot forces of the node pass (scratch, set by
+    /// The contacts with a dashpot (`2b + k`) in the assembly's order, and
+    /// their dashpots as the node pass applies them (scratch, set by
     /// [`ContactModel::assemble`] and [`ContactModel::dashpots`]).
     #[serde(skip)]
-    dashpot_links: Vec<narrow::DashpotLink>,
+    dashpot_ids: Vec<u32>,
     #[serde(skip)]
-    dashpot_force: Vec<f64>,
+    dashpot_links: Vec<narrow::DashpotLink>,
     /// Candidate pairs evaluated so far.
     pub pairs_evaluated: u64,
     /// Largest stiffness over all laws (Pa/m), for the stable step.
@@ -96,8 +96,8 @@ impl ContactModel {
         // at most two contacts a node: filled by every assembly without
         // growing
         let most = 2 * surface.nodes.len();
+        self.dashpot_ids.reserve(most.saturating_sub(self.dashpot_ids.len()));
         self.dashpot_links.reserve(most.saturating_sub(self.dashpot_links.len()));
-        self.dashpot_force.reserve(most.saturating_sub(self.dashpot_force.len()));
     }
 
     /// Derives the busy flags from the memories (after they were set other
@@ -181,8 +181,8 @@ impl ContactModel {
             spare_out: Default::default(),
             partials: Vec::new(),
             frames: Vec::new(),
+            dashpot_ids: Vec::new(),
             dashpot_links: Vec::new(),
-            dashpot_force: Vec::new(),
             pairs_evaluated: 0,
             max_stiffness,
             max_damping,
@@ -365,10 +365,10 @@ impl ContactModel {
     /// The assembly (serial, in boundary-node order) after
     /// [`ContactModel::search`]: the forces into `forces` (per boundary
     /// node), their dashpot parts into `damping`, and how many dashpots act
-    /// on each boundary node into `damped` ([`narrow::assemble`]; `mass`
-    /// the nodal masses, for the dashpots); returns the summed partials.
-    pub fn assemble(&mut self, out: AssemblyOut<'_>, surface: &Surface, mass: &[f64]) -> ContactPartial {
-        self.reassemble(out, surface, mass);
+    /// on each boundary node into `damped` ([`narrow::assemble`]); returns
+    /// the summed partials.
+    pub fn assemble(&mut self, out: AssemblyOut<'_>) -> ContactPartial {
+        self.reassemble(out);
         let mut sum = ContactPartial::default();
         for p in &self.partials {
             sum.pairs += p.pairs;
@@ -383,32 +383,28 @@ impl ContactModel {
     /// [`ContactModel::assemble`] without counting the pairs: after a
     /// restore or a renumbering, for the dashpots (the forces come out as
     /// saved, up to the order of the sums).
-    pub fn reassemble(&mut self, out: AssemblyOut<'_>, surface: &Surface, mass: &[f64]) {
+    pub fn reassemble(&mut self, out: AssemblyOut<'_>) {
         let AssemblyOut { forces, damping, damped } = out;
         let contacts = [&self.out[..], &self.corner_out[..]];
-        let links = &mut self.dashpot_links;
-        narrow::assemble(contacts, &self.busy, forces, damping, damped, links, &surface.nodes, mass);
-    }
-
-    /// The dashpots' shared inverse masses again from `mass`, with the
-    /// counts `damped` of the last assembly: after masses changed
-    /// (mass scaling) before the next assembly.
-    pub fn share_masses(&mut self, damped: &[u16], mass: &[f64]) {
-        narrow::share_masses(&mut self.dashpot_links, damped, mass);
+        narrow::assemble(contacts, &self.busy, forces, damping, damped, &mut self.dashpot_ids);
     }
 
     /// Whether the last assembly found a contact with a dashpot.
     pub fn has_dashpots(&self) -> bool {
-        !self.dashpot_links.is_empty()
+        !self.dashpot_ids.is_empty()
     }
 
     /// The dashpot forces of the node pass ([`narrow::Dashpot`]): each
-    /// contact's from the predicted velocities `v` (by node) with the
-    /// velocity step `h` (s), then added up per boundary node into `out`
-    /// (N), in the assembly's order.
-    pub fn dashpots(&mut self, v: &[Vec2], h: f64, out: &mut [Vec2]) {
-        self.dashpot_force.resize(self.dashpot_links.len(), 0.0);
-        narrow::dashpot_forces(&self.dashpot_links, v, h, &mut self.dashpot_force);
-        narrow::assemble_dashpots(&self.dashpot_links, &self.dashpot_force, out);
+    /// contact's from the predicted velocities `v` and the masses `mass`
+    /// (by node; `nodes` maps boundary index to node, `damped` counts the
+    /// dashpots per boundary node) with the velocity step `h` (s), in
+    /// parallel, then added up per boundary node into `out` (N), in the
+    /// assembly's order.
+    pub fn dashpots(&mut self, nodes: &[u32], damped: &[u16], mass: &[f64], v: &[Vec2], h: f64, out: &mut [Vec2]) {
+        let contacts = [&self.out[..], &self.corner_out[..]];
+        let links = &mut self.dashpot_links;
+        links.resize(self.dashpot_ids.len(), Default::default());
+        narrow::dashpot_forces(contacts, &self.dashpot_ids, nodes, damped, mass, v, h, links);
+        narrow::assemble_dashpots(links, out);
     }
 }

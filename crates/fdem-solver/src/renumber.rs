@@ -323,7 +323,7 @@ impl Simulation {
                 damping: &mut self.contact_damping_force,
                 damped: &mut self.contact_damped,
             };
-            c.reassemble(out, &surface, &self.nodes.mass);
+            c.reassemble(out);
         }
         self.surface = surface;
 

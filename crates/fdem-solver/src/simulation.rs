@@ -554,11 +554,6 @@ impl Simulation {
             acc.contact_damping += before[5] - after[5];
             acc.mass_scaling += before[0] - after[0];
         }
-        // the dashpots were sized with the masses before (a restore shares
-        // the masses saved, so the two must agree)
-        if let Some(c) = self.contact.as_mut() {
-            c.share_masses(&self.contact_damped, &self.nodes.mass);
-        }
         need.into_iter().map(|(e, _)| e).collect()
     }
 
@@ -608,7 +603,7 @@ impl Simulation {
             passes::node_pass(&inp, &mut nodes.x, &mut nodes.v, node_partials, damped, pred_v, pred_f);
             if let Some(c) = contact.as_mut().filter(|c| c.has_dashpots()) {
                 let h = dt_avg / (1.0 + 0.5 * self.settings.mass_damping * dt_avg);
-                c.dashpots(pred_v, h, dashpot_force);
+                c.dashpots(&self.surface.nodes, damped, &nodes.mass, pred_v, h, dashpot_force);
                 passes::node_pass_damped(
                     &inp,
                     &mut nodes.x,
@@ -681,7 +676,6 @@ impl Simulation {
                 dt,
                 plastic: !self.elastic_stage,
             };
-            let (surface, mass) = (&self.surface, &nodes.mass);
             let (elements, contact) = rayon::join(
                 || {
                     let clock = Instant::now();
@@ -692,7 +686,7 @@ impl Simulation {
                     let (c, clocks) = contact.as_mut().zip(searched)?;
                     let out =
                         AssemblyOut { forces: contact_force, damping: contact_damping_force, damped: contact_damped };
-                    Some(assemble_contact(c, clocks, out, surface, mass))
+                    Some(assemble_contact(c, clocks, out))
                 },
             );
             self.phase_times.elements += elements;
@@ -885,7 +879,7 @@ fn evaluate_contact(
     out: AssemblyOut<'_>,
 ) -> ContactOutcome {
     let clocks = search_contact(contact, surface, nodes, dt);
-    assemble_contact(contact, clocks, out, surface, &nodes.mass)
+    assemble_contact(contact, clocks, out)
 }
 
 /// The first part of a contact evaluation (parallel): the broad phase
@@ -905,10 +899,8 @@ fn assemble_contact(
     contact: &mut ContactModel,
     (broad_secs, search_secs): (f64, f64),
     out: AssemblyOut<'_>,
-    surface: &Surface,
-    mass: &[f64],
 ) -> ContactOutcome {
     let clock = Instant::now();
-    let sum = contact.assemble(out, surface, mass);
+    let sum = contact.assemble(out);
     ContactOutcome { sum, broad_secs, narrow_secs: search_secs + clock.elapsed().as_secs_f64() }
 }
