@@ -776,9 +776,6 @@ pub struct DashpotLink {
     pub xi: f64,
     /// The facet's outward unit normal.
     pub normal: Vec2,
-    /// `1/μ` with each node's mass shared among its dashpots (1/kg per
-    /// metre of thickness).
-    pub inverse_mass: f64,
     /// The dashpot's normal force on the node (N/m, along `normal`).
     pub force: f64,
 }
@@ -869,7 +866,7 @@ pub fn dashpot_forces(
         }
         let rate = rel[0] * d.normal[0] + rel[1] * d.normal[1];
         let f = -d.coefficient * rate / (1.0 + d.coefficient * h * inverse_mass);
-        *link = DashpotLink { bnodes, xi: c.xi, normal: d.normal, inverse_mass, force: f.max(-d.spring) };
+        *link = DashpotLink { bnodes, xi: c.xi, normal: d.normal, force: f.max(-d.spring) };
     });
 }
 
@@ -1034,9 +1031,10 @@ mod tests {
         assemble([&first, &corner], &busy, &mut forces, &mut damping, &mut damped, &mut ids);
         let nodes: Vec<u32> = (0..nb as u32).map(|b| 10 + b).collect();
         let mass: Vec<f64> = (0..nb + 10).map(|i| 1.0 + i as f64).collect();
-        let v = vec![[0.0; 2]; nb + 10];
+        let v: Vec<Vec2> = (0..nb + 10).map(|i| [0.1 * i as f64, 0.3 - 0.05 * i as f64]).collect();
         let mut links = vec![DashpotLink::default(); ids.len()];
         dashpot_forces([&first, &corner], &ids, &nodes, &damped, &mass, &v, 0.1, &mut links);
+        let computed: Vec<f64> = links.iter().map(|l| l.force).collect();
         let fd: Vec<f64> = (0..links.len()).map(|i| 0.5 + i as f64).collect();
         links.iter_mut().zip(&fd).for_each(|(l, &f)| l.force = f);
         assemble_dashpots(&links, &mut dashpot_sum);
@@ -1077,16 +1075,24 @@ mod tests {
         assert_eq!(ids, [3, 6, 7, 10]);
         assert_eq!(list, [1, 3, 3, 5]);
         assert_eq!(list, want_list);
-        // each link's shared inverse mass: Σ w² (dashpots on the node) / m
-        for l in &links {
+        // each link's force from its predicted gap rate and the shared
+        // inverse mass Σ w² (dashpots on the node) / m, written out
+        for ((l, &got), &id) in links.iter().zip(&computed).zip(&ids) {
+            let (b, k) = ((id / 2) as usize, id % 2);
+            let c = if k == 0 { &first[b] } else { &corner[b] };
             let w = [1.0, 1.0 - l.xi, l.xi];
-            let want: f64 = (0..3)
-                .map(|k| {
-                    let b = l.bnodes[k] as usize;
-                    w[k] * w[k] * f64::from(want_damped[b]) / mass[nodes[b] as usize]
+            let node_v = |j: usize| v[nodes[l.bnodes[j] as usize] as usize];
+            let rel: Vec<f64> = (0..2).map(|d| node_v(0)[d] - w[1] * node_v(1)[d] - w[2] * node_v(2)[d]).collect();
+            let rate = rel[0] * c.dashpot.normal[0] + rel[1] * c.dashpot.normal[1];
+            let inv_mu: f64 = (0..3)
+                .map(|j| {
+                    let bj = l.bnodes[j] as usize;
+                    w[j] * w[j] * f64::from(want_damped[bj]) / mass[nodes[bj] as usize]
                 })
                 .sum();
-            assert!((l.inverse_mass - want).abs() <= 1e-15 * want, "{} against {want}", l.inverse_mass);
+            let cc = c.dashpot.coefficient;
+            let want = (-cc * rate / (1.0 + cc * 0.1 * inv_mu)).max(-c.dashpot.spring);
+            assert!((got - want).abs() <= 1e-12 * want.abs().max(1.0), "{got} against {want}");
         }
         assert_eq!(forces, want_f);
         assert_eq!(damping, want_d);

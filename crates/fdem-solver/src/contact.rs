@@ -68,8 +68,8 @@ pub(crate) struct ContactModel {
     /// Largest stiffness over all laws (Pa/m), for the stable step.
     pub max_stiffness: f64,
     /// Largest damping ratio over all laws. Kept in the saved state; the
-    /// stable step no longer needs it since the node pass takes the
-    /// dashpots implicitly (checkpoint format 6).
+    /// stable step no longer needs it since the node pass applies the
+    /// dashpots on the predicted velocities (checkpoint format 6).
     pub max_damping: f64,
     /// Margin given by the user, if any.
     margin: Option<f64>,

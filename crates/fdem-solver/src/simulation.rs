@@ -443,9 +443,9 @@ impl Simulation {
     /// Boundary node `b`'s frequency with its contact springs, `ω =
     /// √(ω_e² + ω_c²)`; its critical step is `2 / ω`. `None` for a node
     /// without mass. The contact dashpot does not shorten it: the node pass
-    /// takes each node's own dashpot part implicitly (on a node pressing a
-    /// node of equal mass, the trapezoidal rule), where an explicit dashpot
-    /// of damping ratio ξ cost the factor `√(1 + ξ²) − ξ` (docs/contact.md).
+    /// applies it as the backward-Euler step of each pair on the predicted
+    /// velocities, where an explicit dashpot of damping ratio ξ cost the
+    /// factor `√(1 + ξ²) − ξ` (docs/contact.md).
     fn contact_node_frequency(&self, contact: &ContactModel, b: usize) -> Option<f64> {
         let node = self.surface.nodes[b] as usize;
         let m = self.nodes.mass[node];
@@ -468,7 +468,8 @@ impl Simulation {
     /// meet `target` exactly. An element needs `ω_e ≤ W` with `W = 2 /
     /// √(T² + 2Tβ)` (the stiffness-damping-reduced bound solved for ω); a
     /// contact node's frequency scales as `1/√s` when all its elements'
-    /// masses grow by `s`, so it needs the factor `(ω T / 2)²` on them. Factors only grow. Once the run has started, a node whose mass
+    /// masses grow by `s`, so it needs the factor `(ω T / 2)²` on them.
+    /// Factors only grow. Once the run has started, a node whose mass
     /// grows keeps its momentum (its whole-step velocity drops by
     /// `m_old / m_new`), the reported work terms stay continuous, and the
     /// kinetic energy that this inelastic accretion takes is booked as
