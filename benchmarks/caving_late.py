@@ -1,5 +1,6 @@
 """Throughput of late block-caving steps: fractured, flowing rock with tens
-of thousands of contacts and a crack insertion check every 10 steps.
+of thousands of contacts and a crack insertion check every 6 steps
+(`CavingCase.check_every`; 10 before 2026-11-24 evening).
 Restarts from a checkpoint that `examples/block_caving.py` wrote at the end
 of its run (``<out>/caving.ckpt``), steps it at each thread count and
 reports element-updates per second and the share of each phase (the
