@@ -101,6 +101,10 @@ pub struct Edits {
     pub split_edges: Vec<([u32; 2], u32)>,
     /// Nodes at which a crack was inserted.
     pub inserted_at: Vec<u32>,
+    /// Candidates that wait for the next check because an insertion of this
+    /// check claimed part of their star, in candidate order. They are still
+    /// due: the caller must keep them candidates at the next check.
+    pub waiting: Vec<u32>,
 }
 
 #[inline]
@@ -211,7 +215,11 @@ pub fn plan(
     };
     for &p in candidates {
         let star = star_of(p);
-        if star.is_empty() || star.iter().any(|&(e, ..)| claimed[e as usize]) {
+        if star.is_empty() {
+            continue;
+        }
+        if star.iter().any(|&(e, ..)| claimed[e as usize]) {
+            edits.waiting.push(p);
             continue;
         }
         let xp = x[p as usize];
@@ -535,9 +543,11 @@ mod tests {
         let csr = node_elements(x.len(), &t);
         let active = vec![true; t.len()];
         let normal = vec![0.0; x.len()];
-        // nodes 5 and 6 are neighbours: only the first inserts this check
+        // nodes 5 and 6 are neighbours: only the first inserts this check,
+        // and the second is reported as waiting (still due)
         let e = plan(&t, &active, &csr, &x, &[5, 6], &nodes(&normal), &FractureParams::default());
         assert_eq!(e.inserted_at, vec![5]);
+        assert_eq!(e.waiting, vec![6]);
     }
 
     #[test]

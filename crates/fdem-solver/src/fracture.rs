@@ -223,10 +223,27 @@ impl Simulation {
             // what each new crack still owes, from the mesh before the edits
             owed = edits.inserted_at.iter().map(|&p| self.remaining_softening(&fr, p)).collect();
         }
+        // A candidate that waits (an insertion of this check claimed part of
+        // its star) stays driven: its star keeps the factors of the last
+        // check instead of today's. Otherwise, once its elements passed
+        // F = 1, it would never be driven again and the node never cut, and
+        // the more candidates a check collects (the longer the interval)
+        // the more cracks would be lost: the caved volume of the quick
+        // block-caving case depended on the check interval through this
+        // (docs/fracture.md). The edits keep every existing element's id
+        // (a changed element keeps its id, its children are appended), so
+        // these ids hold after them.
+        let keep: Vec<(u32, f64)> = edits
+            .waiting
+            .iter()
+            .flat_map(|&p| self.node_elems.row(p as usize))
+            .map(|&item| item / 3)
+            .filter_map(|e| fr.factor_seen.get(e as usize).map(|&seen| (e, seen)))
+            .collect();
         fr.candidates = candidates;
         self.fracture = Some(fr);
         if edits.inserted_at.is_empty() {
-            self.remember_factors();
+            self.remember_factors(&keep);
             return false;
         }
         let clock = std::time::Instant::now();
@@ -306,7 +323,7 @@ impl Simulation {
         let pt = &mut self.phase_times;
         (pt.surface, pt.broad_phase, pt.time_step) = inner;
         pt.topology += clock.elapsed().as_secs_f64();
-        self.remember_factors();
+        self.remember_factors(&keep);
         true
     }
 
@@ -331,14 +348,18 @@ impl Simulation {
     }
 
     /// Records every element's failure factor for the next check's "still
-    /// driven" test.
-    fn remember_factors(&mut self) {
+    /// driven" test, but for the elements listed in `keep` (element, factor
+    /// to keep), which get theirs back: the stars of waiting candidates.
+    fn remember_factors(&mut self, keep: &[(u32, f64)]) {
         let Some(fr) = &mut self.fracture else { return };
         let (state, material, materials) = (&self.elems.state, &self.elems.material, &self.materials);
         fr.factor_seen.resize(state.len(), 0.0);
         fr.factor_seen.par_iter_mut().enumerate().with_min_len(crate::CHUNK).for_each(|(e, f)| {
             *f = materials[material[e] as usize].plastic.as_ref().map_or(0.0, |l| l.failure_factor(&state[e]));
         });
+        for &(e, seen) in keep {
+            fr.factor_seen[e as usize] = seen;
+        }
     }
 
     /// Adds the forces of the intact bonds at `xⁿ` to the contact forces of
@@ -538,5 +559,118 @@ impl Simulation {
             self.nodes.bc.push(self.constraints.len() as u32);
             self.constraints.push(c);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::model::{ContactSpec, FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec};
+    use crate::simulation::Simulation;
+    use fdem_fracture::FractureParams;
+    use fdem_material::principal::DirectionCode;
+    use fdem_material::CrackBand;
+
+    /// A unit square of 4 × 4 cells, two right triangles each; node `(i, j)`
+    /// is `5 j + i`, cell `(i, j)` holds elements `2 (4 j + i)` and `+ 1`.
+    fn plate() -> ModelSpec {
+        let n = 4;
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u64;
+        let points = (0..=n).flat_map(|j| (0..=n).map(move |i| [i as f64 / n as f64, j as f64 / n as f64])).collect();
+        let mut triangles = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let m = triangles.len();
+        let law = LawSpec::MohrCoulombRankine {
+            cohesion: 4e6,
+            friction: 35f64.to_radians(),
+            dilation: 5f64.to_radians(),
+            tensile_strength: 1e6,
+            fracture_energy: 70.0,
+            crack_band: CrackBand::Oliver,
+        };
+        ModelSpec {
+            points,
+            triangles,
+            materials: vec![MaterialSpec { density: 2700.0, young: 10e9, poisson: 0.2, law }],
+            element_material: vec![0; m],
+            contact: Some(ContactSpec {
+                laws: vec![InterfaceSpec {
+                    normal_stiffness: 1e11,
+                    shear_stiffness: 1e11,
+                    friction: 0.5,
+                    cohesion: 0.0,
+                    damping_ratio: 0.5,
+                }],
+                facet_laws: Vec::new(),
+                crack_law: 0,
+                margin: None,
+            }),
+            fracture: Some(FractureSpec { params: FractureParams::default(), interval: 1, insert_at: 1.0 }),
+            ..Default::default()
+        }
+    }
+
+    /// The pieces of the mesh: nodes joined by active elements, counted
+    /// over the nodes that have any.
+    fn pieces(sim: &Simulation) -> usize {
+        let n = sim.nodes.x.len();
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn find(p: &mut [usize], mut i: usize) -> usize {
+            while p[i] != i {
+                p[i] = p[p[i]];
+                i = p[i];
+            }
+            i
+        }
+        let mut used = vec![false; n];
+        for (t, &on) in sim.elems.conn.iter().zip(&sim.elems.active) {
+            if !on {
+                continue;
+            }
+            for k in 0..3 {
+                used[t[k] as usize] = true;
+                let (a, b) = (find(&mut parent, t[k] as usize), find(&mut parent, t[(k + 1) % 3] as usize));
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+        (0..n).filter(|&i| used[i] && find(&mut parent, i) == i).count()
+    }
+
+    /// Every node of the row `y = ½` is due at once (its elements fully
+    /// softened, σ1 vertical: a horizontal crack along the grid's edges),
+    /// but neighbours share elements, so one check inserts only some of them
+    /// and the others wait. They were due and still are: the next checks
+    /// cut them and the plate comes apart in two, although nothing softens
+    /// between the checks. (Before 2026-11-25 a waiting candidate whose
+    /// elements had passed `F = 1` was never driven again, and the plate
+    /// stayed in one piece, joined at the nodes that had waited.)
+    #[test]
+    fn candidates_that_wait_are_cut_at_the_next_checks() {
+        let mut sim = Simulation::new(plate(), 1).unwrap();
+        let law = sim.materials[0].plastic.expect("plastic law");
+        let band = 0.25;
+        let kappa = 1.5 * law.tensile_strength / law.softening_modulus(band);
+        // the cells of rows 1 and 2 (y from ¼ to ¾): F = 1.5, softening
+        // since the last check (F there was ½)
+        for e in 8..24 {
+            let st = &mut sim.elems.state[e];
+            st.crack_band = band;
+            st.kappa = kappa;
+            st.direction_code = DirectionCode::of_angle(std::f64::consts::FRAC_PI_2);
+        }
+        let fr = sim.fracture.as_mut().unwrap();
+        fr.factor_seen = (0..32).map(|e| if (8..24).contains(&e) { 0.5 } else { 0.0 }).collect();
+        assert!(sim.fracture_check());
+        let first = sim.fracture.as_ref().unwrap().insertions;
+        assert!((1..5).contains(&first), "{first} of the 5 nodes in the first check");
+        assert_eq!(pieces(&sim), 1);
+        for _ in 0..4 {
+            sim.fracture_check();
+        }
+        assert_eq!(pieces(&sim), 2, "after {} insertions", sim.fracture.as_ref().unwrap().insertions);
     }
 }
