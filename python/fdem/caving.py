@@ -118,10 +118,16 @@ class CavingCase:
     (:meth:`Model.fracture`): 6 of these steps are as long as the 10 steps
     of the runs before 2026-11-24 (whose step the explicit dashpots cut to
     0.72 of today's, at a safety of 0.8), about 2.4×10⁻⁴ s at the paper's
-    scale. How much rock comes down depends on that interval, not only on
-    the mesh: the quick case (safety 0.8) caves 290–306 m² with checks 10
-    steps apart, 420–433 m² at 7, 437–442 m² at 5 and 458–464 m² at 2
-    (docs/caving.md)."""
+    scale. How much rock comes down depends on that interval once it is
+    too long: over four numberings each, the quick case caves 446–510 m²
+    with checks 2 steps apart, 476–521 m² at 4, 479–522 m² at 6 and
+    459–556 m² at 8, but 311–352 m² at 10 (docs/caving.md, "Waiting crack
+    candidates stay due"). A crack running at the Rayleigh speed (2 550
+    m/s) crosses the quick mesh's median edge (4.3 m) in about 10 of its
+    steps: checks further apart than that hold cracks back, since an
+    insertion advances a crack by about one element. At the paper's scale
+    the median edge (1.05 m) takes about 10 steps late in the run and 7 at
+    the intact step, so 6 keeps a margin."""
 
     size: float = 1.0
     joint_scale: float = 1.0

@@ -645,7 +645,7 @@ mod tests {
     /// but neighbours share elements, so one check inserts only some of them
     /// and the others wait. They were due and still are: the next checks
     /// cut them and the plate comes apart in two, although nothing softens
-    /// between the checks. (Before 2026-11-25 a waiting candidate whose
+    /// between the checks. (Before 2026-11-24, night, a waiting candidate whose
     /// elements had passed `F = 1` was never driven again, and the plate
     /// stayed in one piece, joined at the nodes that had waited.)
     #[test]
