@@ -811,13 +811,8 @@ pub fn assemble(
                 continue;
             }
             let [fa, fb] = c.ends.map(|i| i as usize);
-            for (out, f) in [(&mut *forces, c.force), (&mut *damping, c.damping_force)] {
-                for d in 0..2 {
-                    out[b][d] += f[d];
-                    out[fa][d] -= (1.0 - c.xi) * f[d];
-                    out[fb][d] -= c.xi * f[d];
-                }
-            }
+            spread(forces, [b, fa, fb], c.xi, c.force);
+            spread(damping, [b, fa, fb], c.xi, c.damping_force);
             if c.dashpot.coefficient > 0.0 {
                 dashpots.push(2 * b as u32 + k as u32);
                 for (node, w) in [(b, 1.0), (fa, 1.0 - c.xi), (fb, c.xi)] {
@@ -876,12 +871,19 @@ pub fn assemble_dashpots(links: &[DashpotLink], out: &mut [Vec2]) {
     out.iter_mut().for_each(|f| *f = [0.0; 2]);
     for l in links {
         let f = [l.force * l.normal[0], l.force * l.normal[1]];
-        let [b, fa, fb] = l.bnodes.map(|i| i as usize);
-        for d in 0..2 {
-            out[b][d] += f[d];
-            out[fa][d] -= (1.0 - l.xi) * f[d];
-            out[fb][d] -= l.xi * f[d];
-        }
+        spread(out, l.bnodes.map(|i| i as usize), l.xi, f);
+    }
+}
+
+/// Adds the force `f` of a contact of node `b` on the facet `[fa, fb]` at
+/// `ξ` into `out` (by boundary node): `f` on the node, `−(1−ξ) f` and `−ξ f`
+/// on the facet's ends (eq. 2.7).
+#[inline(always)]
+fn spread(out: &mut [Vec2], [b, fa, fb]: [usize; 3], xi: f64, f: Vec2) {
+    for d in 0..2 {
+        out[b][d] += f[d];
+        out[fa][d] -= (1.0 - xi) * f[d];
+        out[fb][d] -= xi * f[d];
     }
 }
 
@@ -1042,7 +1044,7 @@ mod tests {
         let (mut want_f, mut want_d, mut want_p) = (vec![[0.0; 2]; nb], vec![[0.0; 2]; nb], vec![[0.0; 2]; nb]);
         let (mut want_damped, mut want_list) = (vec![0u16; nb], Vec::new());
         for b in 0..nb {
-            for (k, c) in [&first[b], &corner[b]].into_iter().enumerate() {
+            for c in [&first[b], &corner[b]] {
                 if c.facet == NONE {
                     continue;
                 }
@@ -1059,7 +1061,6 @@ mod tests {
                 // weight is not zero
                 if c.dashpot.coefficient > 0.0 {
                     let f = c.dashpot.normal.map(|n| fd[want_list.len()] * n);
-                    let _ = k;
                     want_list.push(b as u32);
                     for d in 0..2 {
                         want_p[b][d] += f[d];

@@ -117,7 +117,7 @@ pub(crate) fn node_pass(
                     pfc[j] = f;
                     continue;
                 }
-                advance(inp, i, m, [f, f_ext, fc, fd], &mut xc[j], &mut vc[j], &mut acc);
+                advance(inp, (keep, scale), i, m, [f, f_ext, fc, fd], &mut xc[j], &mut vc[j], &mut acc);
             }
             *part = acc;
         });
@@ -137,6 +137,7 @@ pub(crate) fn node_pass_damped(
     pred_f: &[Vec2],
     dashpot: &[Vec2],
 ) {
+    let factors = inp.damping_factors();
     x.par_chunks_mut(CHUNK).zip(v.par_chunks_mut(CHUNK)).zip(partials.par_iter_mut()).enumerate().for_each(
         |(c, ((xc, vc), part))| {
             let mut acc = NodePartial::default();
@@ -155,7 +156,7 @@ pub(crate) fn node_pass_damped(
                 // the contact force as applied: the dashpots' estimate
                 // replaced by their forces
                 let fc = [fc[0] - fd[0] + d[0], fc[1] - fd[1] + d[1]];
-                advance(inp, i, m, [f, f_ext, fc, d], &mut xc[j], &mut vc[j], &mut acc);
+                advance(inp, factors, i, m, [f, f_ext, fc, d], &mut xc[j], &mut vc[j], &mut acc);
             }
             part.merge(&acc);
         },
@@ -208,10 +209,12 @@ impl NodeInputs<'_> {
 /// external, `fc` contact and `fd` that contact force's dashpot part (N,
 /// `[f, f_ext, fc, fd]`): its velocity `v` to `v^{n+½}`, its position `x`
 /// to `x^{n+1}`, and its work terms, largest speed and any non-finite value
-/// into `acc`.
+/// into `acc`. `(keep, scale)` are [`NodeInputs::damping_factors`], worked
+/// out once per pass.
 #[inline]
 fn advance(
     inp: &NodeInputs<'_>,
+    (keep, scale): (f64, f64),
     i: usize,
     m: f64,
     forces: [Vec2; 4],
@@ -220,7 +223,6 @@ fn advance(
     acc: &mut NodePartial,
 ) {
     let [f, f_ext, fc, fd] = forces;
-    let (keep, scale) = inp.damping_factors();
     let v_old = *v;
     let r = inp.dt_avg / m;
     let mut v_new = [(keep * v_old[0] + r * f[0]) * scale, (keep * v_old[1] + r * f[1]) * scale];
