@@ -143,6 +143,7 @@ macro_rules! saved_state {
                 node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],
                 elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
                 contact_omega: Vec::new(),
+                omega_carry: Default::default(),
                 contact_damped: Vec::new(),
                 dashpot_force: Vec::new(),
                 pred_v: Vec::new(),

@@ -673,4 +673,42 @@ mod tests {
         }
         assert_eq!(pieces(&sim), 2, "after {} insertions", sim.fracture.as_ref().unwrap().insertions);
     }
+
+    /// After every insertion the boundary nodes' contact frequencies of the
+    /// stable step are carried over to the new surface except where the
+    /// change made them stale (`carry_contact_omega`): they must be exactly
+    /// (in every bit) what a fresh evaluation of every node gives.
+    #[test]
+    fn contact_frequencies_carried_over_an_insertion_are_those_of_a_fresh_evaluation() {
+        let mut sim = Simulation::new(plate(), 1).unwrap();
+        let law = sim.materials[0].plastic.expect("plastic law");
+        let band = 0.25;
+        let kappa = 1.5 * law.tensile_strength / law.softening_modulus(band);
+        for e in 8..24 {
+            let st = &mut sim.elems.state[e];
+            st.crack_band = band;
+            st.kappa = kappa;
+            st.direction_code = DirectionCode::of_angle(std::f64::consts::FRAC_PI_2);
+        }
+        let fr = sim.fracture.as_mut().unwrap();
+        fr.factor_seen = (0..32).map(|e| if (8..24).contains(&e) { 0.5 } else { 0.0 }).collect();
+        let mut changes = 0;
+        for _ in 0..5 {
+            if !sim.fracture_check() {
+                continue;
+            }
+            changes += 1;
+            let nb = sim.surface.nodes.len();
+            let contact = sim.contact.as_ref().unwrap();
+            let fresh: Vec<Option<u64>> =
+                (0..nb).map(|b| sim.contact_node_frequency(contact, b).map(f64::to_bits)).collect();
+            let carried: Vec<Option<u64>> = sim.contact_omega.iter().map(|w| w.map(f64::to_bits)).collect();
+            assert_eq!(carried, fresh, "after change {changes}");
+            // some carried, some worked out again (none listed: nothing
+            // was carried, every node was evaluated)
+            let stale = sim.omega_carry.stale.len();
+            assert!(0 < stale && stale < nb, "{stale} of {nb} boundary nodes worked out again");
+        }
+        assert!(changes >= 2, "{changes} insertion checks changed the mesh");
+    }
 }

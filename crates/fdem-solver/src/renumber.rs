@@ -304,6 +304,9 @@ impl Simulation {
             fr.renumber(&node_order, &elem_order, &node_map);
         }
         self.node_elems = active_node_elements(n, &self.elems.conn, &self.elems.active);
+        // by the old boundary indices: worked out again at the next
+        // evaluation
+        self.contact_omega.clear();
 
         // the surface and what hangs on its boundary nodes and facets
         let key_map = |k: u32| 3 * elem_map[(k / 3) as usize] + k % 3;

@@ -291,6 +291,7 @@ impl Simulation {
             node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],
             elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
             contact_omega: Vec::new(),
+            omega_carry: Default::default(),
             layout: crate::renumber::Layout::new(m),
             pool: Arc::new(pool),
         };

@@ -174,11 +174,30 @@ pub struct Simulation {
     /// ([`Simulation::contact_node_frequency`]) at the last stable-step
     /// evaluation (scratch; sized by it).
     pub(crate) contact_omega: Vec<Option<f64>>,
+    /// What a crack insertion needs to carry [`Self::contact_omega`] over
+    /// to the new surface instead of working every boundary node out again
+    /// ([`Simulation::carry_contact_omega`]; scratch).
+    pub(crate) omega_carry: OmegaCarry,
     /// Internal index ↔ id of nodes and elements (spatial renumbering).
     pub(crate) layout: crate::renumber::Layout,
     /// Worker threads; every public entry point that steps runs inside it
     /// once, so the passes' parallel loops cost no cross-thread hand-off.
     pub(crate) pool: Arc<rayon::ThreadPool>,
+}
+
+/// Scratch for carrying the boundary nodes' contact frequencies over a
+/// topology change ([`Simulation::carry_contact_omega`]).
+#[derive(Default)]
+pub(crate) struct OmegaCarry {
+    /// The nodes (mesh ids, ascending) whose contact frequency the last
+    /// topology change made stale: to be worked out again by the next
+    /// stable-step evaluation after it.
+    pub stale: Vec<u32>,
+    /// The node masses before the last rebuild (a frequency whose node's
+    /// mass changed in any bit is stale).
+    pub old_mass: Vec<f64>,
+    /// The frequencies' buffer before the carry-over (reused).
+    pub spare: Vec<Option<f64>>,
 }
 
 pub(crate) fn invalid<T>(msg: String) -> Result<T, SetupError> {
@@ -325,10 +344,20 @@ impl Simulation {
     }
 
     /// The critical step before the safety factor (s), updating the stored
-    /// element frequencies (all, or the listed elements') and every
-    /// boundary node's contact frequency.
+    /// element frequencies (all, or the listed elements') and the boundary
+    /// nodes' contact frequencies: every node's, or with `touched` (after
+    /// a topology change) those the change left stale.
     fn critical_step(&mut self, touched: Option<&[u32]>) -> f64 {
-        self.critical_step_of(touched, None)
+        if touched.is_none() {
+            return self.critical_step_of(None, None);
+        }
+        // after a topology change: the contact frequencies it left stale
+        // (the others were carried over, `carry_contact_omega`; when they
+        // could not be, the list is ignored and every node evaluated)
+        let stale = std::mem::take(&mut self.omega_carry.stale);
+        let crit = self.critical_step_of(touched, Some(&stale));
+        self.omega_carry.stale = stale;
+        crit
     }
 
     /// [`Self::critical_step`], re-evaluating the contact frequencies of
@@ -446,7 +475,7 @@ impl Simulation {
     /// applies it as the backward-Euler step of each pair on the predicted
     /// velocities, where an explicit dashpot of damping ratio ξ cost the
     /// factor `√(1 + ξ²) − ξ` (docs/contact.md).
-    fn contact_node_frequency(&self, contact: &ContactModel, b: usize) -> Option<f64> {
+    pub(crate) fn contact_node_frequency(&self, contact: &ContactModel, b: usize) -> Option<f64> {
         let node = self.surface.nodes[b] as usize;
         let m = self.nodes.mass[node];
         if m <= 0.0 {
