@@ -298,6 +298,34 @@ def test_fracture_is_bit_for_bit_on_one_and_two_threads():
             assert np.array_equal(u, w)
 
 
+def test_the_check_interval_changes_between_stages_and_is_saved(tmp_path):
+    """``configure(check_every=…)`` sets the steps between fracture checks
+    from then on; the run keeps it through a checkpoint. Checked by what it
+    does: with checks too far apart to come before 0.012 s the bar softens
+    but is not cut, and brought back to 5 steps it is."""
+    sim, model, _ = tension_bar(0.02)
+    assert sim.check_every == 5
+    sim.configure(check_every=10**9)
+    sim.run(until=0.012, progress=False)
+    assert sim.insertions == 0 and sim.energies()["fracture"] > 0
+    sim.configure(check_every=5)
+    sim.run(until=0.014, progress=False)
+    assert sim.insertions > 0
+    sim.configure(check_every=7, safety=0.7)
+    again = fdem.Simulation.from_checkpoint(sim.save_checkpoint(tmp_path / "bar.ckpt"), model)
+    assert again.check_every == 7
+    with pytest.raises(ValueError, match="check_every"):
+        sim.configure(check_every=0)
+    with pytest.raises(ValueError, match="safety"):
+        sim.configure(check_every=3, safety=2.0)
+    assert sim.check_every == 7  # nothing changed by a refused call
+    plain = fdem.Model(fdem.Mesh.rectangle(1, 1, 2, 2), material=fdem.Elastic(E=1e9, nu=0.2, rho=2000.0))
+    plain_sim = fdem.Simulation(plain)
+    assert plain_sim.check_every is None
+    with pytest.raises(ValueError, match="no fracture"):
+        plain_sim.configure(check_every=3)
+
+
 def test_cracks_are_line_cells_in_the_output(tmp_path):
     sim, model, _ = tension_bar(0.02)
     sim.run(until=0.012, output_every=0.006, output=tmp_path / "bar", progress=False)

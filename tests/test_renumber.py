@@ -86,7 +86,7 @@ def test_renumbered_run_steps_on_with_the_same_physics(cracking):
     here as a different force, step or crack."""
     a, b = restore(cracking), restore(cracking)
     b.renumber()
-    interval = CASE.check_every  # steps between crack checks
+    interval = a.check_every  # steps between crack checks
     before_check = interval - a.steps % interval - 1
     a.step(before_check)
     b.step(before_check)

@@ -115,19 +115,21 @@ class CavingCase:
     estimate holds a margin: the quick case at rest stays at rest at 1.2
     times it and first gains energy at 1.3.
     ``check_every`` is the number of steps between fracture checks
-    (:meth:`Model.fracture`): 6 of these steps are as long as the 10 steps
-    of the runs before 2026-11-24 (whose step the explicit dashpots cut to
-    0.72 of today's, at a safety of 0.8), about 2.4×10⁻⁴ s at the paper's
-    scale. How much rock comes down depends on that interval once it is
-    too long: over four numberings each, the quick case caves 446–510 m²
-    with checks 2 steps apart, 476–521 m² at 4, 479–522 m² at 6 and
-    459–556 m² at 8, but 311–352 m² at 10 (docs/caving.md, "Waiting crack
-    candidates stay due"). A crack running at the Rayleigh speed (2 550
-    m/s) crosses the quick mesh's median edge (4.3 m) in about 10 of its
-    steps: checks further apart than that hold cracks back, since an
-    insertion advances a crack by about one element. At the paper's scale
-    the median edge (1.05 m) takes about 10 steps late in the run and 7 at
-    the intact step, so 6 keeps a margin."""
+    (:meth:`Model.fracture`; :meth:`Simulation.configure` changes it during
+    a run): a due node is cut up to that many steps late, 0.97 ms of
+    simulated time in the quick case and 0.24 ms at the paper's scale. How
+    much that delay matters was measured over several numberings each
+    (docs/caving.md, "The check interval is a delay in time"): on the quick
+    4 m mesh 2 to 8 steps cave the same (448–556 m²) but 10 steps (1.6 ms)
+    a third less, and with the step halved 12 steps cave like 6 and 20
+    like 10, so the bound is a time; 2 m elements lose nothing even at 40
+    steps (3.2 ms), so it is not the time a crack takes to cross an
+    element, which halves with the element. With 1 m elements (the
+    paper's; the quick case's joints and schedule) 24 steps (0.95 ms)
+    instead of 6 save a tenth of the run (the insertions' rebuilds), and
+    cave within the spread of the numberings, but give 5% more fragments
+    on average, beyond that spread (so do longer delays at 2 m). The
+    default stays at 6."""
 
     size: float = 1.0
     joint_scale: float = 1.0
@@ -508,6 +510,7 @@ def run_caving(
         "fallen_area_m2": float(sim.areas()[fallen].sum()),
         "caved_area_m2": float(sim.areas()[caved].sum()),
         "time_step_s": sim.time_step,
+        "fracture_check_steps": sim.check_every,
         "added_mass_fraction": sim.added_mass / (sim.masses().sum() - sim.added_mass),
         "energy_residual_J": e["residual"],
         "energy_supplied_J": supplied,

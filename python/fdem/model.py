@@ -283,7 +283,9 @@ class Model:
         insert_at: float = 0.02,
     ) -> Model:
         """Switches on crack insertion by the rotating-crack model (paper
-        2.4, DESIGN §4.4). Every ``check_every`` steps the failure factors
+        2.4, DESIGN §4.4). Every ``check_every`` steps
+        (:meth:`Simulation.configure` changes it during a run; a due node
+        is cut up to that many steps late, docs/fracture.md) the failure factors
         of the elements (κ H / f_t, Mohr–Coulomb + Rankine materials) are
         averaged at the nodes; at every node that has reached 1 a crack is
         opened normal to σ1: along an existing edge within ``edge_tolerance``

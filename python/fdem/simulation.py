@@ -139,9 +139,11 @@ class Simulation:
     def configure(self, **changes: Any) -> Simulation:
         """Changes run settings between stages (``safety``, ``dt``,
         ``mass_damping``, ``stiffness_damping``, ``dt_interval``,
-        ``energy_growth``, ``mass_scaling``, ``renumber``). Turning mass scaling on, or
+        ``energy_growth``, ``mass_scaling``, ``renumber``, ``check_every``). Turning mass scaling on, or
         raising its step, scales masses at once; turning it off keeps the
-        masses added so far."""
+        masses added so far. ``check_every`` is the number of steps between
+        fracture checks (:meth:`Model.fracture`; the model must have
+        fracture), saved with the run."""
         known = {
             "safety",
             "dt",
@@ -152,23 +154,35 @@ class Simulation:
             "mass_scaling",
             "renumber",
         }
-        unknown = set(changes) - known
+        unknown = set(changes) - known - {"check_every"}
         if unknown:
-            raise ValueError(f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
-        cur = dict(self._settings)
-        cur["dt"] = cur.pop("fixed_dt")
-        cur.update(changes)
-        self._settings = self._check_settings(
-            cur["safety"],
-            cur["dt"],
-            cur["mass_damping"],
-            cur["stiffness_damping"],
-            cur["dt_interval"],
-            cur["energy_growth"],
-            cur["mass_scaling"],
-            cur["renumber"],
-        )
-        self._core.set_settings(**self._settings)
+            raise ValueError(f"unknown setting(s) {sorted(unknown)}; known: {sorted(known | {'check_every'})}")
+        steps = None
+        if "check_every" in changes:
+            steps = whole("check_every", changes.pop("check_every"))
+            if self._core.fracture_interval is None:
+                raise ValueError("check_every: the model has no fracture (Model.fracture) to check")
+        settings = self._settings
+        if changes:
+            cur = dict(self._settings)
+            cur["dt"] = cur.pop("fixed_dt")
+            cur.update(changes)
+            settings = self._check_settings(
+                cur["safety"],
+                cur["dt"],
+                cur["mass_damping"],
+                cur["stiffness_damping"],
+                cur["dt_interval"],
+                cur["energy_growth"],
+                cur["mass_scaling"],
+                cur["renumber"],
+            )
+        # everything checked before anything changes
+        if steps is not None:
+            self._core.set_fracture_interval(steps)
+        if changes:
+            self._settings = settings
+            self._core.set_settings(**settings)
         return self
 
     # --- state ------------------------------------------------------------
@@ -191,6 +205,14 @@ class Simulation:
     def n_elements(self) -> int:
         """Elements now (crack insertion splits some)."""
         return int(self._core.n_elements)
+
+    @property
+    def check_every(self) -> int | None:
+        """Steps between fracture checks (``None`` without fracture):
+        :meth:`Model.fracture`'s ``check_every`` or the last
+        :meth:`configure`'s."""
+        n = self._core.fracture_interval
+        return None if n is None else int(n)
 
     @property
     def time_step(self) -> float:

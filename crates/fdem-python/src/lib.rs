@@ -506,6 +506,20 @@ impl PySimulation {
         })
     }
 
+    /// Steps between fracture checks, or `None` without fracture.
+    #[getter]
+    fn fracture_interval(&self) -> Option<u32> {
+        self.sim.fracture_interval()
+    }
+
+    /// Sets the steps between fracture checks from now on.
+    fn set_fracture_interval(&mut self, steps: u32) -> PyResult<()> {
+        guard(|| {
+            self.ok()?;
+            self.sim.set_fracture_interval(steps).map_err(|e| value_error(e.to_string()))
+        })
+    }
+
     /// Spatial renumberings so far.
     #[getter]
     fn renumberings(&self) -> u64 {

@@ -308,6 +308,12 @@ impl Simulation {
         self.fracture.as_ref().map(|f| f.insertions)
     }
 
+    /// Steps between fracture checks (DESIGN §4.4), or `None` without
+    /// fracture.
+    pub fn fracture_interval(&self) -> Option<u32> {
+        self.fracture.as_ref().map(|f| f.interval)
+    }
+
     /// The largest relative change of mass and momentum any insertion has
     /// caused, or `None` without fracture.
     pub fn insertion_audit(&self) -> Option<crate::fracture::InsertionAudit> {

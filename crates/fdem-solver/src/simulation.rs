@@ -826,6 +826,22 @@ impl Simulation {
         self.elastic_stage = on;
     }
 
+    /// Sets the steps between fracture checks (DESIGN §4.4) from now on: a
+    /// check follows every step whose count is a multiple of `steps`. It is
+    /// saved with the run. The delay with which a due node is cut is up to
+    /// this many steps; how long it may be before the crack pattern
+    /// changes is measured in docs/fracture.md.
+    pub fn set_fracture_interval(&mut self, steps: u32) -> Result<(), SetupError> {
+        let Some(fr) = self.fracture.as_mut() else {
+            return Err(SetupError::Invalid("the model has no fracture: no check interval to set".into()));
+        };
+        if steps == 0 {
+            return Err(SetupError::Invalid("fracture check interval must be at least 1 step".into()));
+        }
+        fr.interval = steps;
+        Ok(())
+    }
+
     /// Whether an elastic stage is on (see [`Self::set_elastic_stage`]).
     pub fn elastic_stage(&self) -> bool {
         self.elastic_stage
