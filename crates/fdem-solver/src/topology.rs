@@ -266,20 +266,20 @@ impl crate::simulation::Simulation {
         self.omega.resize(m, 0.0);
         self.elems.force.resize(3 * m, [0.0; 2]);
     }
-}
 
-impl crate::simulation::Simulation {
     /// Carries the boundary nodes' contact frequencies
-    /// ([`Simulation::contact_omega`], by boundary index of the current
-    /// surface) over to `new`, the surface after a topology change whose
-    /// `touched` nodes are those [`Simulation::rebuild_structure`] lists,
-    /// and lists in [`crate::simulation::OmegaCarry::stale`] the nodes whose frequency must be
-    /// worked out again: the touched ones, those new to the boundary, and
-    /// those whose mass changed in any bit (the masses are summed again in
-    /// the current element order). Any other node's frequency is exactly
-    /// what it was: its elements (and so their frequencies), its mass and
-    /// its facets are the same. Working out every boundary node at every
-    /// insertion cost 3.4 ms of it at the paper's scale on 2 threads.
+    /// ([`Self::contact_omega`], by boundary index of the current surface)
+    /// over to `new`, the surface after a topology change whose `touched`
+    /// nodes are those [`Self::rebuild_structure`] lists, and lists in
+    /// [`crate::simulation::OmegaCarry::stale`] the nodes whose frequency
+    /// must be worked out again: the touched ones, those new to the
+    /// boundary, and those whose mass changed in any bit (the masses are
+    /// summed again in the current element order). Any other node's
+    /// frequency is exactly what it was: its elements (and so their
+    /// frequencies), its mass and its facets are the same. The stable step
+    /// of an insertion took 3.4 ms at the paper's scale on 2 threads with
+    /// every boundary node worked out again, 2.7 ms with the carry-over
+    /// (docs/caving.md, "The check interval is a delay in time").
     /// Without `touched` (excavation), or when the frequencies are not for
     /// the current surface (after a restore or a renumbering), nothing is
     /// carried and the next evaluation works out every node.
