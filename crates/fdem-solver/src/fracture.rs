@@ -640,6 +640,25 @@ mod tests {
         (0..n).filter(|&i| used[i] && find(&mut parent, i) == i).count()
     }
 
+    /// The plate with the cells of rows 1 and 2 (y from ¼ to ¾) at F = 1.5
+    /// and softening since the last check (F there was ½), σ1 vertical:
+    /// every node of the row y = ½ is due at once.
+    fn softened_row_plate() -> Simulation {
+        let mut sim = Simulation::new(plate(), 1).unwrap();
+        let law = sim.materials[0].plastic.expect("plastic law");
+        let band = 0.25;
+        let kappa = 1.5 * law.tensile_strength / law.softening_modulus(band);
+        for e in 8..24 {
+            let st = &mut sim.elems.state[e];
+            st.crack_band = band;
+            st.kappa = kappa;
+            st.direction_code = DirectionCode::of_angle(std::f64::consts::FRAC_PI_2);
+        }
+        let fr = sim.fracture.as_mut().unwrap();
+        fr.factor_seen = (0..32).map(|e| if (8..24).contains(&e) { 0.5 } else { 0.0 }).collect();
+        sim
+    }
+
     /// Every node of the row `y = ½` is due at once (its elements fully
     /// softened, σ1 vertical: a horizontal crack along the grid's edges),
     /// but neighbours share elements, so one check inserts only some of them
@@ -650,20 +669,7 @@ mod tests {
     /// stayed in one piece, joined at the nodes that had waited.)
     #[test]
     fn candidates_that_wait_are_cut_at_the_next_checks() {
-        let mut sim = Simulation::new(plate(), 1).unwrap();
-        let law = sim.materials[0].plastic.expect("plastic law");
-        let band = 0.25;
-        let kappa = 1.5 * law.tensile_strength / law.softening_modulus(band);
-        // the cells of rows 1 and 2 (y from ¼ to ¾): F = 1.5, softening
-        // since the last check (F there was ½)
-        for e in 8..24 {
-            let st = &mut sim.elems.state[e];
-            st.crack_band = band;
-            st.kappa = kappa;
-            st.direction_code = DirectionCode::of_angle(std::f64::consts::FRAC_PI_2);
-        }
-        let fr = sim.fracture.as_mut().unwrap();
-        fr.factor_seen = (0..32).map(|e| if (8..24).contains(&e) { 0.5 } else { 0.0 }).collect();
+        let mut sim = softened_row_plate();
         assert!(sim.fracture_check());
         let first = sim.fracture.as_ref().unwrap().insertions;
         assert!((1..5).contains(&first), "{first} of the 5 nodes in the first check");
@@ -680,18 +686,7 @@ mod tests {
     /// (in every bit) what a fresh evaluation of every node gives.
     #[test]
     fn contact_frequencies_carried_over_an_insertion_are_those_of_a_fresh_evaluation() {
-        let mut sim = Simulation::new(plate(), 1).unwrap();
-        let law = sim.materials[0].plastic.expect("plastic law");
-        let band = 0.25;
-        let kappa = 1.5 * law.tensile_strength / law.softening_modulus(band);
-        for e in 8..24 {
-            let st = &mut sim.elems.state[e];
-            st.crack_band = band;
-            st.kappa = kappa;
-            st.direction_code = DirectionCode::of_angle(std::f64::consts::FRAC_PI_2);
-        }
-        let fr = sim.fracture.as_mut().unwrap();
-        fr.factor_seen = (0..32).map(|e| if (8..24).contains(&e) { 0.5 } else { 0.0 }).collect();
+        let mut sim = softened_row_plate();
         let mut changes = 0;
         for _ in 0..5 {
             if !sim.fracture_check() {
