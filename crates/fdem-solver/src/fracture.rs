@@ -16,6 +16,14 @@ use crate::passes::{reference_geometry, NO_BC};
 use crate::simulation::Simulation;
 use crate::topology::ancestor_pair;
 
+/// `steps` as a fracture check interval: at least 1 step.
+pub(crate) fn check_interval(steps: u32) -> Result<u32, crate::error::SetupError> {
+    if steps == 0 {
+        return Err(crate::error::SetupError::Invalid("fracture check interval must be at least 1 step".into()));
+    }
+    Ok(steps)
+}
+
 /// Fracture settings and scratch buffers.
 #[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct FractureModel {

@@ -176,9 +176,7 @@ impl Simulation {
                 if contact.is_none() {
                     return invalid("fracture needs contact (the crack faces are contact surfaces)".into());
                 }
-                if interval == 0 {
-                    return invalid("fracture check interval must be at least 1 step".into());
-                }
+                crate::fracture::check_interval(interval)?;
                 let ok = |v: f64, lo: f64, hi: f64| v.is_finite() && v >= lo && v <= hi;
                 let in_range = ok(params.edge_tolerance, 0.0, std::f64::consts::FRAC_PI_4)
                     && ok(params.crack_tolerance, 0.0, std::f64::consts::FRAC_PI_2)

@@ -835,10 +835,7 @@ impl Simulation {
         let Some(fr) = self.fracture.as_mut() else {
             return Err(SetupError::Invalid("the model has no fracture: no check interval to set".into()));
         };
-        if steps == 0 {
-            return Err(SetupError::Invalid("fracture check interval must be at least 1 step".into()));
-        }
-        fr.interval = steps;
+        fr.interval = crate::fracture::check_interval(steps)?;
         Ok(())
     }
 
