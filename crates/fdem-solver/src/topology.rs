@@ -212,23 +212,32 @@ impl crate::simulation::Simulation {
     pub(crate) fn rebuild_structure(&mut self, origins: &[(u32, u32)], touched: Option<&[u32]>) {
         let n = self.nodes.x.len();
         let m = self.elems.conn.len();
-        self.node_elems = active_node_elements(n, &self.elems.conn, &self.elems.active);
         // the masses from scratch, in ascending element order: after a
         // renumbering the stored sums are in the old order, and a node's
         // mass must not depend on when the mesh was last renumbered (the
-        // old ones kept to find the contact frequencies that stay)
+        // old ones kept to find the contact frequencies that stay). Both
+        // passes are serial and independent: side by side.
         std::mem::swap(&mut self.nodes.mass, &mut self.omega_carry.old_mass);
-        self.nodes.mass.clear();
-        self.nodes.mass.resize(n, 0.0);
-        for (e, t) in self.elems.conn.iter().enumerate() {
-            if !self.elems.active[e] {
-                continue;
-            }
-            let nodal = self.nodal_mass_of(e);
-            for &v in t {
-                self.nodes.mass[v as usize] += nodal;
-            }
-        }
+        let mut mass = std::mem::take(&mut self.nodes.mass);
+        let this = &*self;
+        let (node_elems, ()) = rayon::join(
+            || active_node_elements(n, &this.elems.conn, &this.elems.active),
+            || {
+                mass.clear();
+                mass.resize(n, 0.0);
+                for (e, t) in this.elems.conn.iter().enumerate() {
+                    if !this.elems.active[e] {
+                        continue;
+                    }
+                    let nodal = this.nodal_mass_of(e);
+                    for &v in t {
+                        mass[v as usize] += nodal;
+                    }
+                }
+            },
+        );
+        self.node_elems = node_elems;
+        self.nodes.mass = mass;
         let dirty = touched.map(|nodes| dirty_elements(&self.node_elems, nodes));
         let ancestor = &self.ancestor;
         let contact = &self.contact;
