@@ -284,7 +284,8 @@ impl Format4 {
 /// What format 6 added, written after [`Format4`]: the dashpot of every
 /// contact (first and corner), which the next node pass applies
 /// ([`Dashpot`], docs/contact.md). A file of an older format restores with
-/// none: its first step has its dashpots' estimate only.
+/// none (its contacts' normals and spring forces are recovered from their
+/// saved forces): its first step has its dashpots' estimate only.
 #[derive(Serialize, Deserialize)]
 struct Format6 {
     dashpots: [Vec<Dashpot>; 2],
@@ -295,12 +296,6 @@ impl Format6 {
         let of = |list: &[NodeContact]| list.iter().map(|c| c.dashpot).collect();
         let dashpots = s.contact.as_ref().map_or_else(Default::default, |c| [of(&c.out), of(&c.corner_out)]);
         Format6 { dashpots }
-    }
-
-    /// No dashpots: what an older file restores with.
-    fn none(o: &StateOwned) -> Self {
-        let nb = if o.contact.is_some() { o.surface.nodes.len() } else { 0 };
-        Format6 { dashpots: [vec![Dashpot::default(); nb], vec![Dashpot::default(); nb]] }
     }
 }
 
@@ -394,10 +389,14 @@ impl Simulation {
         } else {
             (Format4::none(&owned), rest)
         };
+        // an older file has no dashpots: its contacts keep the normals and
+        // spring forces recovered from their saved forces, without a
+        // dashpot (`NodeContact`'s conversion from the saved record)
         let (dashpots, rest) = if version >= 6 {
-            postcard::take_from_bytes::<Format6>(rest).map_err(decode)?
+            let (d, rest) = postcard::take_from_bytes::<Format6>(rest).map_err(decode)?;
+            (Some(d), rest)
         } else {
-            (Format6::none(&owned), rest)
+            (None, rest)
         };
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
@@ -409,7 +408,7 @@ impl Simulation {
             }
         }
         check_consistent(&owned)?;
-        if dashpots.dashpots.iter().any(|d| d.len() != owned.contact_force.len()) {
+        if dashpots.as_ref().is_some_and(|d| d.dashpots.iter().any(|d| d.len() != owned.contact_force.len())) {
             return Err(CheckpointError::Invalid("the contact dashpots do not match the surface".into()));
         }
         if !renumbering.layout.is_consistent(owned.nodes.x.len(), owned.elems.conn.len()) {
@@ -428,9 +427,11 @@ impl Simulation {
         let mut sim = assemble(owned, Arc::new(pool));
         sim.layout = renumbering.layout;
         if let Some(c) = sim.contact.as_mut() {
-            for (list, saved) in [&mut c.out, &mut c.corner_out].into_iter().zip(dashpots.dashpots) {
-                for (o, d) in list.iter_mut().zip(saved) {
-                    o.dashpot = d;
+            if let Some(saved) = dashpots {
+                for (list, saved) in [&mut c.out, &mut c.corner_out].into_iter().zip(saved.dashpots) {
+                    for (o, d) in list.iter_mut().zip(saved) {
+                        o.dashpot = d;
+                    }
                 }
             }
             // the assembly again, which also finds the damped nodes (the
