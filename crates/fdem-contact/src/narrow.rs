@@ -31,22 +31,28 @@ const DEPTH_SLACK: f64 = 1e-3;
 /// other body from catching that body's side face.
 const FACING_COS: f64 = 0.25;
 
-/// What a boundary node remembers between steps.
+/// What a boundary node remembers between steps. 24 bytes: it is read and
+/// written for every contact in every step (with the resumed direction in
+/// the record, 48 bytes, a late step of the paper-scale caving run took
+/// about 4% longer; docs/contact.md).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(from = "SavedState", into = "SavedState")]
 pub struct ContactState {
     /// The facet it touched last step, or [`NONE`].
     pub facet: u32,
-    /// Elastic tangential gap `g_tᵉ` (m), carried over to an adjacent facet.
-    pub elastic_gap: f64,
     /// Set when a topology change (a crack, an excavation) took away the
     /// facet this node was pressing on, or created the node as a copy of
-    /// one that was: the direction `b − a` of that facet, along which
-    /// `elastic_gap` is measured. The next evaluation may then take up a
+    /// one that was: that facet's index before the change (its nodes are in
+    /// [`NarrowInputs::resumed`]), whose direction `b − a` is the one
+    /// `elastic_gap` is measured along; [`NONE`] otherwise. The next evaluation may then take up a
     /// contact that is already penetrated (its spring energy was counted
     /// before the change, so no energy appears), once; without this rule a
     /// new contact must be entered through the facet's line (no energy pump
-    /// at corners) and every joint spring cut by a crack would vanish.
-    pub resumed_along: Option<Vec2>,
+    /// at corners) and every joint spring cut by a crack would vanish. The
+    /// evaluation that follows every topology change clears it.
+    pub resumed: u32,
+    /// Elastic tangential gap `g_tᵉ` (m), carried over to an adjacent facet.
+    pub elastic_gap: f64,
     /// The penetration (m, ≥ 0) at the last evaluation (for a resumed
     /// contact: before the topology change). A contact that moves to
     /// another facet, other than by entering it through its line, may be no
@@ -57,7 +63,32 @@ pub struct ContactState {
 
 impl Default for ContactState {
     fn default() -> Self {
-        Self { facet: NONE, elastic_gap: 0.0, resumed_along: None, depth: 0.0 }
+        Self { facet: NONE, resumed: NONE, elastic_gap: 0.0, depth: 0.0 }
+    }
+}
+
+/// A [`ContactState`] as checkpoints hold it (formats 1–6), with the
+/// resumed facet's direction in the record. A checkpoint is written between
+/// steps, after the evaluation that clears every resumed mark, so a file
+/// always holds `None` there (and one that held a direction would restore
+/// it as an ordinary memory).
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SavedState {
+    facet: u32,
+    elastic_gap: f64,
+    resumed_along: Option<Vec2>,
+    depth: f64,
+}
+
+impl From<SavedState> for ContactState {
+    fn from(s: SavedState) -> Self {
+        ContactState { facet: s.facet, resumed: NONE, elastic_gap: s.elastic_gap, depth: s.depth }
+    }
+}
+
+impl From<ContactState> for SavedState {
+    fn from(s: ContactState) -> Self {
+        SavedState { facet: s.facet, elastic_gap: s.elastic_gap, resumed_along: None, depth: s.depth }
     }
 }
 
@@ -400,6 +431,10 @@ pub struct NarrowInputs<'a> {
     pub candidates: &'a Csr,
     /// Interface laws by index.
     pub laws: &'a [InterfaceLaw],
+    /// The nodes `[a, b]` of the facets before the last topology change,
+    /// by their index then: a resumed contact ([`ContactState::resumed`])
+    /// reads the direction `x_b − x_a` of its old facet here.
+    pub resumed: &'a [[u32; 2]],
     /// The step (s), for the tangential slip increment.
     pub dt: f64,
 }
@@ -521,7 +556,8 @@ fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate
         (d[1] * n[0] - d[0] * n[1]) >= SMOOTH_COS * (d[0] * d[0] + d[1] * d[1]).sqrt()
     } {
         Some(1)
-    } else if let Some(d) = state.resumed_along {
+    } else if state.resumed != NONE {
+        let d = resumed_direction(inp, state.resumed);
         // a resumed contact: no deeper than it was before the topology
         // change, preferably on a facet parallel to its old one
         if !no_deeper(state.depth) {
@@ -535,6 +571,15 @@ fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate
     } else {
         no_deeper(0.0).then_some(2)
     }
+}
+
+/// The direction `x_b − x_a` (m) of the facet `[a, b]` that was number
+/// `old` before the last topology change ([`ContactState::resumed`]).
+#[inline]
+fn resumed_direction(inp: &NarrowInputs<'_>, old: u32) -> Vec2 {
+    let [a, b] = inp.resumed[old as usize];
+    let (pa, pb) = (inp.x[a as usize], inp.x[b as usize]);
+    [pb[0] - pa[0], pb[1] - pa[1]]
 }
 
 /// The projection test of a candidate: the node projects onto the facet
@@ -810,8 +855,8 @@ fn respond(
         let prev = &inp.surface.facets[state.facet as usize];
         let (pa, pb) = (inp.x[prev.nodes[0] as usize], inp.x[prev.nodes[1] as usize]);
         carried([pb[0] - pa[0], pb[1] - pa[1]])
-    } else if let Some(d) = state.resumed_along {
-        carried(d)
+    } else if state.resumed != NONE {
+        carried(resumed_direction(inp, state.resumed))
     } else {
         0.0
     };
@@ -822,7 +867,7 @@ fn respond(
     // (the normal forces need no such care: the passes share the load).
     let cohesion = 0.5 * law.cohesion * trib;
     let (ft, new_gap, work) = friction_update(law, alpha_t, elastic_gap, slip, normal_force, cohesion);
-    *state = ContactState { facet: f, elastic_gap: new_gap, resumed_along: None, depth: -gap };
+    *state = ContactState { facet: f, resumed: NONE, elastic_gap: new_gap, depth: -gap };
     acc.contacts += 1;
     acc.friction += work;
     acc.stored += 0.5 * alpha_n * gap * gap + 0.5 * alpha_t * new_gap * new_gap;
@@ -1018,6 +1063,7 @@ mod tests {
             frames: &frames,
             candidates: &broad.candidates,
             laws: &laws,
+            resumed: &[],
             dt: 1e-4,
         };
         let mut states = vec![ContactState::default(); surface.nodes.len()];
@@ -1318,7 +1364,7 @@ mod tests {
                 &'a [InterfaceLaw],
             ),
         ) -> NarrowInputs<'a> {
-            NarrowInputs { x, v, mass, surface, frames, candidates: &broad.candidates, laws, dt: 1e-4 }
+            NarrowInputs { x, v, mass, surface, frames, candidates: &broad.candidates, laws, resumed: &[], dt: 1e-4 }
         }
         let fixed = (&v[..], &mass[..], &surface, &broad, &laws[..]);
         // the memories of one evaluation at the start
@@ -1462,6 +1508,7 @@ mod tests {
             frames: &frames,
             candidates: &broad.candidates,
             laws: &laws,
+            resumed: &[],
             dt,
         };
         let empty = vec![ContactState::default(); surface.nodes.len()];

@@ -56,6 +56,10 @@ pub(crate) struct ContactModel {
     /// Per facet: its frame at the current evaluation (scratch).
     #[serde(skip)]
     frames: Vec<FacetFrame>,
+    /// The nodes of the facets before the last topology change (scratch,
+    /// [`NarrowInputs::resumed`]).
+    #[serde(skip)]
+    resumed: Vec<[u32; 2]>,
     /// The contacts with a dashpot (`2b + k`) in the assembly's order, and
     /// their dashpots as the node pass applies them (scratch, set by
     /// [`ContactModel::assemble`] and [`ContactModel::dashpots`]).
@@ -181,6 +185,7 @@ impl ContactModel {
             spare_out: Default::default(),
             partials: Vec::new(),
             frames: Vec::new(),
+            resumed: Vec::new(),
             dashpot_ids: Vec::new(),
             dashpot_links: Vec::new(),
             pairs_evaluated: 0,
@@ -253,6 +258,8 @@ impl ContactModel {
             s.par_extend(rayon::iter::repeat_n(ContactState::default(), nb));
         }
         if let Some(old) = old {
+            self.resumed.clear();
+            self.resumed.extend(old.facets.iter().map(|f| f.nodes));
             // a facet keeps its key through a rebuild; a contact stays on it
             // if it still joins the same two nodes
             let max_key = new.facets.last().map_or(0, |f| f.key as usize + 1);
@@ -285,15 +292,14 @@ impl ContactModel {
                 NONE => old.mean_normal(x, ob),
                 f => old.facet_normal(x, f),
             };
-            let resumed = |s: ContactState, depth: f64| -> ContactState {
-                let [a, b] = old.facets[s.facet as usize].nodes;
-                let (pa, pb) = (x[a as usize], x[b as usize]);
-                ContactState {
-                    facet: NONE,
-                    elastic_gap: s.elastic_gap,
-                    resumed_along: Some([pb[0] - pa[0], pb[1] - pa[1]]),
-                    depth,
-                }
+            // a contact whose facet is gone resumes along the old facet's
+            // direction, read by the next evaluation from the old facets'
+            // nodes (kept in `resumed`) at the same positions
+            let resumed = |s: ContactState, depth: f64| ContactState {
+                facet: NONE,
+                resumed: s.facet,
+                elastic_gap: s.elastic_gap,
+                depth,
             };
             // every node's memory by itself (parallel: each writes its own
             // entries; 5 ms a change at the paper's scale when serial)
@@ -332,7 +338,7 @@ impl ContactModel {
                     let of = &old.facets[s.facet as usize];
                     let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
                     *slot = if !created && f != NONE && new.facets[f as usize].nodes == of.nodes {
-                        ContactState { facet: f, elastic_gap: s.elastic_gap, resumed_along: None, depth }
+                        ContactState { facet: f, resumed: NONE, elastic_gap: s.elastic_gap, depth }
                     } else {
                         resumed(s, depth)
                     };
@@ -366,6 +372,7 @@ impl ContactModel {
             frames: &self.frames,
             candidates: &self.broad.candidates,
             laws: &self.laws,
+            resumed: &self.resumed,
             dt,
         };
         let c = Contacts {
