@@ -259,12 +259,15 @@ pub fn project(s: Vec2, a: Vec2, b: Vec2) -> (f64, f64, Vec2, Vec2, f64) {
 /// The current geometry of one facet: its unit tangent `t` (first node to
 /// second), length (m), the position of its first node and its depth limit
 /// (m, [`SurfaceFacet::depth`](crate::SurfaceFacet::depth)). Its outward
-/// normal is `n = (t_y, −t_x)`. One record holds everything the candidate
-/// test reads (its first 48 bytes) and the facet nodes' velocities a
-/// contact needs, so that testing a candidate is one random read instead
-/// of three (the facet, its frame, its first node's position): the test is
-/// latency-bound in a fractured mesh, whose new nodes and elements lie far
-/// from their neighbours in memory.
+/// normal is `n = (t_y, −t_x)`. One 48-byte record holds everything the
+/// candidate test reads, so that testing a candidate is one random read
+/// instead of three (the facet, its frame, its first node's position): the
+/// test is latency-bound in a fractured mesh, whose new nodes and elements
+/// lie far from their neighbours in memory. (It also held the facet nodes'
+/// velocities for a contact's relative velocity; read from the nodes
+/// instead, the 32 bytes fewer written for every facet in every step made
+/// the contact pass of a late step of the paper-scale caving run 5–15%
+/// faster: docs/contact.md.)
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FacetFrame {
     /// Unit tangent.
@@ -275,14 +278,11 @@ pub struct FacetFrame {
     pub a: Vec2,
     /// Deepest penetration accepted behind the facet (m).
     pub depth: f64,
-    /// Velocities of the first and second node (m/s): a contact's relative
-    /// velocity reads them here, in the record it has already loaded.
-    pub v: [Vec2; 2],
 }
 
 impl Default for FacetFrame {
     fn default() -> Self {
-        Self { t: [0.0; 2], len: 0.0, a: [0.0; 2], depth: f64::INFINITY, v: [[0.0; 2]; 2] }
+        Self { t: [0.0; 2], len: 0.0, a: [0.0; 2], depth: f64::INFINITY }
     }
 }
 
@@ -311,17 +311,17 @@ impl FacetFrame {
     }
 }
 
-/// Every facet's [`FacetFrame`] at positions `x` and velocities `v`
-/// (parallel over fixed chunks), once per contact evaluation: the candidate
+/// Every facet's [`FacetFrame`] at positions `x` (parallel over fixed
+/// chunks), once per contact evaluation: the candidate
 /// tests, node normals and tributary lengths read them instead of
 /// recomputing a square root per use (each facet's frame was computed 5–6
 /// times per step before).
-pub fn facet_frames(surface: &Surface, x: &[Vec2], v: &[Vec2], frames: &mut [FacetFrame]) {
+pub fn facet_frames(surface: &Surface, x: &[Vec2], frames: &mut [FacetFrame]) {
     frames.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
         for (j, fr) in out.iter_mut().enumerate() {
             let facet = &surface.facets[c * CHUNK + j];
             let [a, b] = facet.nodes.map(|n| n as usize);
-            *fr = FacetFrame { depth: facet.depth, v: [v[a], v[b]], ..FacetFrame::of(x[a], x[b]) };
+            *fr = FacetFrame { depth: facet.depth, ..FacetFrame::of(x[a], x[b]) };
         }
     });
 }
@@ -537,7 +537,8 @@ fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate
     // how far the node moved towards the facet this step
     let approach = || {
         let w = c.xi.clamp(0.0, 1.0);
-        let (v, [va, vb]) = (inp.v, inp.frames[c.f as usize].v);
+        let [ia, ib] = inp.surface.facets[c.f as usize].nodes;
+        let (v, [va, vb]) = (inp.v, [inp.v[ia as usize], inp.v[ib as usize]]);
         ((v[node][0] - (1.0 - w) * va[0] - w * vb[0]) * n[0] + (v[node][1] - (1.0 - w) * va[1] - w * vb[1]) * n[1])
             .abs()
             * inp.dt
@@ -812,7 +813,7 @@ fn respond(
     let law = &inp.laws[facet.law as usize];
     let (ia, ib) = (facet.nodes[0] as usize, facet.nodes[1] as usize);
     let (n, t) = (inp.frames[f as usize].normal(), inp.frames[f as usize].t);
-    let (v, [va, vb]) = (inp.v, inp.frames[f as usize].v);
+    let (v, [va, vb]) = (inp.v, [inp.v[ia], inp.v[ib]]);
     let vrel = [v[node][0] - (1.0 - xi) * va[0] - xi * vb[0], v[node][1] - (1.0 - xi) * va[1] - xi * vb[1]];
     let gap_rate = vrel[0] * n[0] + vrel[1] * n[1];
     // the node's springs: stiffness per unit area × its share of the
@@ -1054,7 +1055,7 @@ mod tests {
         let v = vec![[0.0; 2]; x.len()];
         let mass = vec![1.0; x.len()];
         let mut frames = vec![FacetFrame::default(); surface.facets.len()];
-        facet_frames(surface, x, &v, &mut frames);
+        facet_frames(surface, x, &mut frames);
         let inp = NarrowInputs {
             x,
             v: &v,
@@ -1368,7 +1369,7 @@ mod tests {
         }
         let fixed = (&v[..], &mass[..], &surface, &broad, &laws[..]);
         // the memories of one evaluation at the start
-        facet_frames(&surface, &x0, &v, &mut frames);
+        facet_frames(&surface, &x0, &mut frames);
         let (mut states, mut corner_states) = (vec![ContactState::default(); nb], vec![ContactState::default(); nb]);
         evaluate_in_place(&inputs(&x0, &frames, fixed), &mut states, &mut corner_states);
         let held = states.iter().chain(&corner_states).filter(|s| s.facet != NONE).count();
@@ -1378,7 +1379,7 @@ mod tests {
             // the upper block slid along x (the candidate lists still hold)
             let x: Vec<Vec2> =
                 x0.iter().enumerate().map(|(i, p)| if i >= 7 { [p[0] + shift, p[1]] } else { *p }).collect();
-            facet_frames(&surface, &x, &v, &mut frames);
+            facet_frames(&surface, &x, &mut frames);
             let inp = inputs(&x, &frames, fixed);
             for b in 0..nb {
                 let (mut s1, mut s2) = (states[b], corner_states[b]);
@@ -1498,7 +1499,7 @@ mod tests {
         let v: Vec<Vec2> = (0..x.len()).map(|i| if i < 4 { [delta / dt, -delta / dt] } else { [0.0; 2] }).collect();
         let mass = vec![1.0; x.len()];
         let mut frames = vec![FacetFrame::default(); surface.facets.len()];
-        facet_frames(&surface, &x, &v, &mut frames);
+        facet_frames(&surface, &x, &mut frames);
         let laws = [InterfaceLaw::new(k, k, 0.0, 0.0, 0.0).unwrap()];
         let inp = NarrowInputs {
             x: &x,

@@ -363,7 +363,7 @@ impl ContactModel {
     /// velocities `v` (parallel; the broad phase must be up to date): every
     /// boundary node's contacts and their forces, not yet assembled.
     pub fn search(&mut self, surface: &Surface, x: &[Vec2], v: &[Vec2], mass: &[f64], dt: f64) {
-        narrow::facet_frames(surface, x, v, &mut self.frames);
+        narrow::facet_frames(surface, x, &mut self.frames);
         let inp = NarrowInputs {
             x,
             v,
