@@ -34,7 +34,7 @@ const FACING_COS: f64 = 0.25;
 /// What a boundary node remembers between steps. 24 bytes: it is read and
 /// written for every contact in every step (with the resumed direction in
 /// the record, 48 bytes, a late step of the paper-scale caving run took
-/// about 4% longer; docs/contact.md).
+/// about 3% longer; docs/contact.md).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(from = "SavedState", into = "SavedState")]
 pub struct ContactState {
@@ -44,12 +44,13 @@ pub struct ContactState {
     /// facet this node was pressing on, or created the node as a copy of
     /// one that was: that facet's index before the change (its nodes are in
     /// [`NarrowInputs::resumed`]), whose direction `b − a` is the one
-    /// `elastic_gap` is measured along; [`NONE`] otherwise. The next evaluation may then take up a
-    /// contact that is already penetrated (its spring energy was counted
-    /// before the change, so no energy appears), once; without this rule a
-    /// new contact must be entered through the facet's line (no energy pump
-    /// at corners) and every joint spring cut by a crack would vanish. The
-    /// evaluation that follows every topology change clears it.
+    /// `elastic_gap` is measured along; [`NONE`] otherwise. The next
+    /// evaluation may then take up a contact that is already penetrated
+    /// (its spring energy was counted before the change, so no energy
+    /// appears), once; without this rule a new contact must be entered
+    /// through the facet's line (no energy pump at corners) and every joint
+    /// spring cut by a crack would vanish. The evaluation that follows
+    /// every topology change clears it.
     pub resumed: u32,
     /// Elastic tangential gap `g_tᵉ` (m), carried over to an adjacent facet.
     pub elastic_gap: f64,
