@@ -68,7 +68,7 @@ fn contact(c: &mut Criterion) {
             narrow_g.bench_function(BenchmarkId::new(format!("pairs_{pairs}"), threads), |b| {
                 b.iter(|| {
                     pool.install(|| {
-                        narrow::facet_frames(&surface, &x, &v, &mut frames);
+                        narrow::facet_frames(&surface, &x, &mut frames);
                         let inp = NarrowInputs {
                             x: &x,
                             v: &v,
@@ -77,6 +77,7 @@ fn contact(c: &mut Criterion) {
                             frames: &frames,
                             candidates: &bp.candidates,
                             laws: &laws,
+                            resumed: &[],
                             dt: 1e-6,
                         };
                         let c = Contacts {
