@@ -89,6 +89,7 @@ impl From<SavedState> for ContactState {
 
 impl From<ContactState> for SavedState {
     fn from(s: ContactState) -> Self {
+        debug_assert_eq!(s.resumed, NONE, "a resumed mark outlived the evaluation after its change");
         SavedState { facet: s.facet, elastic_gap: s.elastic_gap, resumed_along: None, depth: s.depth }
     }
 }

@@ -120,6 +120,10 @@ impl ContactModel {
     pub fn relabel(&mut self, surface: &Surface, facet_map: &[u32], b_map: &[u32]) {
         use crate::renumber::scatter;
         let facet = |f: u32| if f == NONE { NONE } else { facet_map[f as usize] };
+        // a resumed mark indexes the facets before the last topology change;
+        // the evaluation after every change clears it, and renumbering
+        // comes after one
+        debug_assert!(self.states.iter().chain(&self.corner_states).all(|s| s.resumed == NONE));
         for states in [&mut self.states, &mut self.corner_states] {
             states.iter_mut().for_each(|s| s.facet = facet(s.facet));
             scatter(states, b_map);
