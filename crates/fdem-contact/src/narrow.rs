@@ -244,6 +244,9 @@ pub struct ContactPartial {
     pub pairs: u64,
     /// Active contacts.
     pub contacts: u64,
+    /// Of these, contacts kept as the step's evaluation left them
+    /// ([`evaluate_after_change`]).
+    pub kept: u64,
     /// Work dissipated by friction (J/m).
     pub friction: f64,
     /// Elastic energy in the penalty springs (J/m).
@@ -484,6 +487,62 @@ pub fn mark_busy(states: &[ContactState], corner_states: &[ContactState], busy: 
 /// smaller facet id), and applies the penalty, dashpot and friction laws.
 /// Updates the states, fills the contacts and one partial per chunk.
 pub fn evaluate(inp: &NarrowInputs<'_>, c: Contacts<'_>, partials: &mut [ContactPartial]) {
+    evaluate_where(inp, c, partials, |_| false);
+}
+
+/// [`evaluate`] at the same positions right after a topology change that
+/// left some nodes' contacts as they were, without slip (`inp.dt = 0`):
+/// a node flagged in `kept` (per boundary node: its memories and contacts
+/// were carried over from the step's evaluation, and the change touched
+/// neither it nor its own facets) that penetrates none of its candidate
+/// facets flagged in `changed` (per facet: an end of it was touched) keeps
+/// its contacts as the step's evaluation left them; only its held energy
+/// and its contacts are counted. Every other node is evaluated as by
+/// [`evaluate`].
+///
+/// What such a node's evaluation reads is the same as in the step's (the
+/// positions, its candidates and their neighbours, its own facets and its
+/// memory), so it would find the same contacts with the same gaps; it
+/// would differ only in the dashpot's estimate, which depends on the step
+/// and which the node pass replaces anyway ([`Dashpot`]), and through it
+/// in the friction limit. Evaluating every contact again cost 6.5 ms of
+/// the 28 ms an insertion took late in the paper-scale caving run on 2
+/// threads (docs/caving.md).
+pub fn evaluate_after_change(
+    inp: &NarrowInputs<'_>,
+    c: Contacts<'_>,
+    partials: &mut [ContactPartial],
+    kept: &[u8],
+    changed: &[u8],
+) {
+    debug_assert_eq!(kept.len(), c.states.len());
+    debug_assert_eq!(changed.len(), inp.surface.facets.len());
+    evaluate_where(inp, c, partials, |b| {
+        // a changed candidate that the node does not penetrate is passed
+        // over by the search: only one that it does penetrate needs the
+        // evaluation. (The candidate lists are supersets whose extent
+        // depends on the run's history, e.g. on when the mesh was last
+        // renumbered; which candidates the node penetrates does not.)
+        let s = inp.x[inp.surface.nodes[b] as usize];
+        kept[b] != 0
+            && inp.candidates.row(b).iter().all(|&f| {
+                changed[f as usize] == 0 || {
+                    let frame = &inp.frames[f as usize];
+                    let (xi, gap) = frame.project(s, frame.a);
+                    !projects_inside(xi, gap, frame.depth)
+                }
+            })
+    });
+}
+
+/// [`evaluate`], keeping the nodes for which `keep` holds.
+#[inline(always)]
+fn evaluate_where(
+    inp: &NarrowInputs<'_>,
+    c: Contacts<'_>,
+    partials: &mut [ContactPartial],
+    keep: impl Fn(usize) -> bool + Sync,
+) {
     // the chunks are zipped: a short array would silently drop nodes
     debug_assert!([c.corner_states.len(), c.out.len(), c.corner_out.len(), c.busy.len()]
         .iter()
@@ -501,10 +560,33 @@ pub fn evaluate(inp: &NarrowInputs<'_>, c: Contacts<'_>, partials: &mut [Contact
                 if busy[j] == 0 && inp.candidates.row(b).is_empty() {
                     continue;
                 }
+                if keep(b) {
+                    for (k, (state, contact)) in [(&st[j], &oc[j]), (&st2[j], &oc2[j])].into_iter().enumerate() {
+                        if busy[j] & (1 << k) != 0 && contact.facet != NONE {
+                            acc.contacts += 1;
+                            acc.kept += 1;
+                            acc.stored += held_energy(inp, contact, state.elastic_gap);
+                        }
+                    }
+                    continue;
+                }
                 busy[j] = evaluate_node(inp, b, [&mut st[j], &mut st2[j]], [&mut oc[j], &mut oc2[j]], &mut acc);
             }
             *part = acc;
         });
+}
+
+/// The energy held in contact `c`'s springs (J/m) with the elastic
+/// tangential gap `elastic_gap` (its memory's): `½ α_n g² + ½ α_t g_tᵉ²`
+/// as [`respond`] counts it, with `α_n = f_s / (−g)` from the spring's
+/// normal force `f_s = −α_n g` (a contact's gap is negative) and `α_t =
+/// α_n k_t / k_n` (both springs share the node's tributary length).
+#[inline]
+fn held_energy(inp: &NarrowInputs<'_>, c: &NodeContact, elastic_gap: f64) -> f64 {
+    let law = &inp.laws[inp.surface.facets[c.facet as usize].law as usize];
+    let depth = -c.gap;
+    let alpha_t = c.dashpot.spring / depth * (law.shear_stiffness / law.normal_stiffness);
+    0.5 * c.dashpot.spring * depth + 0.5 * alpha_t * elastic_gap * elastic_gap
 }
 
 /// One candidate facet of a node that passed the geometric tests.

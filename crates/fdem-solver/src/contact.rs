@@ -67,6 +67,15 @@ pub(crate) struct ContactModel {
     dashpot_ids: Vec<u32>,
     #[serde(skip)]
     dashpot_links: Vec<narrow::DashpotLink>,
+    /// Set by a topology change that named the nodes it touched
+    /// ([`ContactModel::adopt`]) for the evaluation that follows it: per
+    /// boundary node whether its contacts were carried over as they were,
+    /// and per facet whether an end of it was touched
+    /// ([`narrow::evaluate_after_change`]). Empty otherwise (scratch).
+    #[serde(skip)]
+    kept: Vec<u8>,
+    #[serde(skip)]
+    changed: Vec<u8>,
     /// Candidate pairs evaluated so far.
     pub pairs_evaluated: u64,
     /// Largest stiffness over all laws (Pa/m), for the stable step.
@@ -192,6 +201,8 @@ impl ContactModel {
             resumed: Vec::new(),
             dashpot_ids: Vec::new(),
             dashpot_links: Vec::new(),
+            kept: Vec::new(),
+            changed: Vec::new(),
             pairs_evaluated: 0,
             max_stiffness,
             max_damping,
@@ -213,9 +224,20 @@ impl ContactModel {
     /// created in this change (`origins`: new node → the old node it came
     /// from) takes over its origin's. A contact whose facet has changed, or
     /// that a new node inherits, resumes at the next evaluation with the
-    /// penetration it has (see [`ContactState::resumed_along`]); `x` are the
-    /// current positions.
-    pub fn adopt(&mut self, old: Option<&Surface>, new: &Surface, x: &[Vec2], origins: &[(u32, u32)]) {
+    /// penetration it has (see [`ContactState::resumed`]); `x` are the
+    /// current positions. `touched` (ascending), when the change names the
+    /// nodes it touched (a crack insertion, see
+    /// [`Simulation::rebuild_structure`](crate::simulation::Simulation)),
+    /// lets the evaluation that follows keep the contacts of the nodes away
+    /// from it ([`narrow::evaluate_after_change`]).
+    pub fn adopt(
+        &mut self,
+        old: Option<&Surface>,
+        new: &Surface,
+        x: &[Vec2],
+        origins: &[(u32, u32)],
+        touched: Option<&[u32]>,
+    ) {
         // The default margin follows the mean facet length, with
         // hysteresis: every crack insertion changes that mean a little, and
         // a margin that grew forced the broad phase to rebuild instead of
@@ -244,23 +266,43 @@ impl ContactModel {
                     broad.invalidate();
                 }
             },
-            || self.adopt_memory(old, new, x, origins),
+            || self.adopt_memory(old, new, x, origins, touched),
         );
         self.broad = broad;
     }
 
     /// The memory part of [`ContactModel::adopt`]: the contact memories
     /// carried over to `new`, the contact records emptied, the busy flags
-    /// and scratch buffers sized.
-    fn adopt_memory(&mut self, old: Option<&Surface>, new: &Surface, x: &[Vec2], origins: &[(u32, u32)]) {
+    /// and scratch buffers sized. With `touched` (the nodes the change
+    /// touched, ascending), also the flags of the evaluation that follows
+    /// ([`ContactModel::kept`]): a node keeps its contacts, records
+    /// included, when it was on the old surface, neither it nor an end of
+    /// its own facets was touched, and each of its contacts stays on the
+    /// same facet in the same slot.
+    fn adopt_memory(
+        &mut self,
+        old: Option<&Surface>,
+        new: &Surface,
+        x: &[Vec2],
+        origins: &[(u32, u32)],
+        touched: Option<&[u32]>,
+    ) {
         let nb = new.nodes.len();
-        // the new memory goes into the spare buffers (no fresh allocation,
-        // whose page faults cost as much as filling them)
+        // the new memory and records go into the spare buffers (no fresh
+        // allocation, whose page faults cost as much as filling them)
         let mut states = [std::mem::take(&mut self.spare_states[0]), std::mem::take(&mut self.spare_states[1])];
         for s in &mut states {
             s.clear();
             s.par_extend(rayon::iter::repeat_n(ContactState::default(), nb));
         }
+        let mut outs = [std::mem::take(&mut self.spare_out[0]), std::mem::take(&mut self.spare_out[1])];
+        for o in &mut outs {
+            // filled in parallel: 8 MB each at the paper's scale
+            o.clear();
+            o.par_extend(rayon::iter::repeat_n(NodeContact { facet: NONE, ..Default::default() }, nb));
+        }
+        self.kept.clear();
+        self.changed.clear();
         if let Some(old) = old {
             self.resumed.clear();
             self.resumed.extend(old.facets.iter().map(|f| f.nodes));
@@ -271,10 +313,28 @@ impl ContactModel {
             for (k, f) in new.facets.iter().enumerate() {
                 facet_of_key[f.key as usize] = k as u32;
             }
+            // the touched nodes as bits, and the facets with a touched end:
+            // a facet none of whose ends was touched is the same facet, with
+            // the same neighbours, as before (its two nodes kept their
+            // elements)
+            let mut hit = Vec::new();
+            if let Some(touched) = touched {
+                hit.resize(x.len().div_ceil(64), 0u64);
+                for &v in touched {
+                    hit[v as usize / 64] |= 1 << (v % 64);
+                }
+                let hit = &hit;
+                let is_hit = |v: u32| (hit[v as usize / 64] >> (v % 64)) & 1 == 1;
+                self.changed
+                    .par_extend(new.facets.par_iter().map(|f| u8::from(is_hit(f.nodes[0]) || is_hit(f.nodes[1]))));
+            }
+            let is_hit = |v: u32| hit.get(v as usize / 64).is_none_or(|w| (w >> (v % 64)) & 1 == 1);
+            let changed = &self.changed;
             let old_states = [&self.states, &self.corner_states];
+            let old_out = [&self.out, &self.corner_out];
             // the old node's active contacts: (state, depth, old boundary
             // index, bearing face or NONE); the depth is the memory's, which
-            // every evaluation sets to the contact's `−gap` (so the 88-byte
+            // every evaluation sets to the contact's `−gap` (so the 80-byte
             // contact records of every node need not be read here)
             type Old = Option<(ContactState, f64, usize, u32)>;
             let old_contacts = |node: u32| -> [Old; 2] {
@@ -305,60 +365,99 @@ impl ContactModel {
                 elastic_gap: s.elastic_gap,
                 depth,
             };
+            // whether the node `node` (boundary index `b`) and its own
+            // facets are untouched (never without `touched`)
+            let untouched = |b: usize, node: u32| {
+                !changed.is_empty() && !is_hit(node) && new.node_facets.row(b).iter().all(|&k| changed[k as usize] == 0)
+            };
             // every node's memory by itself (parallel: each writes its own
             // entries; 5 ms a change at the paper's scale when serial)
+            // (sized in any case; dropped below without `touched`)
+            let mut kept = std::mem::take(&mut self.kept);
+            kept.resize(nb, 0);
             let [first, second] = &mut states;
-            let rows = first.par_iter_mut().zip(second.par_iter_mut());
-            new.nodes.par_iter().zip(rows).enumerate().with_min_len(crate::CHUNK).for_each(|(b, (&node, slots))| {
-                let mut from = old_contacts(node);
-                // a node created by this change inherits its origin's contacts
-                let created = from == [None; 2] && old.index_of.get(node as usize).is_none_or(|&i| i == NONE);
-                if created {
-                    match origins.binary_search_by_key(&node, |&(n, _)| n) {
-                        Ok(i) => from = old_contacts(origins[i].1),
-                        Err(_) => return,
+            let [out0, out1] = &mut outs;
+            let rows =
+                (first.par_iter_mut().zip(second.par_iter_mut())).zip(out0.par_iter_mut().zip(out1.par_iter_mut()));
+            new.nodes.par_iter().zip(rows).zip(kept.par_iter_mut()).enumerate().with_min_len(crate::CHUNK).for_each(
+                |(b, ((&node, (slots, records)), keep))| {
+                    let mut from = old_contacts(node);
+                    let on_old = old.index_of.get(node as usize).is_some_and(|&i| i != NONE);
+                    // a node created by this change inherits its origin's contacts
+                    let created = from == [None; 2] && !on_old;
+                    if created {
+                        match origins.binary_search_by_key(&node, |&(n, _)| n) {
+                            Ok(i) => from = old_contacts(origins[i].1),
+                            Err(_) => return,
+                        }
                     }
-                }
-                if from == [None; 2] {
-                    return;
-                }
-                let faces = new.faces[b];
-                let single = faces[0] == NONE;
-                let (slot0, slot1) = slots;
-                for (k, slot) in [slot0, slot1].into_iter().enumerate().take(if single { 1 } else { 2 }) {
-                    let key = if single { NONE } else { new.facets[faces[k] as usize].key };
-                    let same_face =
-                        |o: &Old| o.is_some_and(|(_, _, _, face)| face != NONE && old.facets[face as usize].key == key);
-                    let pick = from.iter().find(|o| same_face(o)).copied().flatten().or_else(|| {
-                        // the old contact whose face points most nearly the same way
-                        let n = if single { new.mean_normal(x, b) } else { new.facet_normal(x, faces[k]) };
-                        let dot = |o: &(ContactState, f64, usize, u32)| {
-                            let m = old_normal(o);
-                            m[0] * n[0] + m[1] * n[1]
+                    let stays = !created && on_old && untouched(b, node);
+                    if from == [None; 2] {
+                        *keep = u8::from(stays);
+                        return;
+                    }
+                    let faces = new.faces[b];
+                    let single = faces[0] == NONE;
+                    let (slot0, slot1) = slots;
+                    // each old contact carried on in its own slot, on its
+                    // own facet
+                    let mut same = [false; 2];
+                    let mut moved = false;
+                    for (k, slot) in [slot0, slot1].into_iter().enumerate().take(if single { 1 } else { 2 }) {
+                        let key = if single { NONE } else { new.facets[faces[k] as usize].key };
+                        let same_face = |o: &Old| {
+                            o.is_some_and(|(_, _, _, face)| face != NONE && old.facets[face as usize].key == key)
                         };
-                        from.iter().flatten().filter(|o| dot(o) > 0.0).max_by(|p, q| dot(p).total_cmp(&dot(q))).copied()
-                    });
-                    let Some((s, depth, ..)) = pick else { continue };
-                    let of = &old.facets[s.facet as usize];
-                    let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
-                    *slot = if !created && f != NONE && new.facets[f as usize].nodes == of.nodes {
-                        ContactState { facet: f, resumed: NONE, elastic_gap: s.elastic_gap, depth }
-                    } else {
-                        resumed(s, depth)
-                    };
-                }
-            });
+                        let pick = from.iter().position(same_face).or_else(|| {
+                            // the old contact whose face points most nearly the same way
+                            let n = if single { new.mean_normal(x, b) } else { new.facet_normal(x, faces[k]) };
+                            let dot = |o: &(ContactState, f64, usize, u32)| {
+                                let m = old_normal(o);
+                                m[0] * n[0] + m[1] * n[1]
+                            };
+                            (0..2)
+                                .filter(|&j| from[j].as_ref().is_some_and(|o| dot(o) > 0.0))
+                                .max_by(|&p, &q| dot(&from[p].unwrap()).total_cmp(&dot(&from[q].unwrap())))
+                        });
+                        let Some(j) = pick else { continue };
+                        let (s, depth, ..) = from[j].expect("a picked contact");
+                        let of = &old.facets[s.facet as usize];
+                        let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
+                        *slot = if !created && f != NONE && new.facets[f as usize].nodes == of.nodes {
+                            same[j] |= j == k && changed.get(f as usize).is_some_and(|&c| c == 0);
+                            moved |= j != k;
+                            ContactState { facet: f, resumed: NONE, elastic_gap: s.elastic_gap, depth }
+                        } else {
+                            resumed(s, depth)
+                        };
+                    }
+                    if !(stays && !moved && (0..2).all(|j| from[j].is_none() || same[j])) {
+                        return;
+                    }
+                    // kept: the step's contacts go on, on the facets' new
+                    // indices
+                    *keep = 1;
+                    let (record0, record1) = records;
+                    for (k, record) in [record0, record1].into_iter().enumerate() {
+                        if let Some((s, _, ob, _)) = from[k] {
+                            let c = &old_out[k][ob];
+                            debug_assert_eq!(c.facet, s.facet, "a contact's record and memory on the same facet");
+                            let f = facet_of_key[old.facets[c.facet as usize].key as usize];
+                            *record = NodeContact { facet: f, ends: new.facets[f as usize].ends, ..*c };
+                        }
+                    }
+                },
+            );
+            if touched.is_none() {
+                kept.clear();
+            }
+            self.kept = kept;
         }
         let [first, second] = states;
         self.spare_states =
             [std::mem::replace(&mut self.states, first), std::mem::replace(&mut self.corner_states, second)];
-        let [spare0, spare1] = &mut self.spare_out;
-        for (out, spare) in [(&mut self.out, spare0), (&mut self.corner_out, spare1)] {
-            // filled in parallel: 10 MB each at the paper's scale
-            spare.clear();
-            spare.par_extend(rayon::iter::repeat_n(NodeContact { facet: NONE, ..Default::default() }, nb));
-            std::mem::swap(out, spare);
-        }
+        let [out0, out1] = outs;
+        self.spare_out = [std::mem::replace(&mut self.out, out0), std::mem::replace(&mut self.corner_out, out1)];
         self.mark_busy();
         self.size_scratch(new);
     }
@@ -386,7 +485,14 @@ impl ContactModel {
             corner_out: &mut self.corner_out,
             busy: &mut self.busy,
         };
-        narrow::evaluate(&inp, c, &mut self.partials);
+        if self.kept.is_empty() {
+            narrow::evaluate(&inp, c, &mut self.partials);
+        } else {
+            narrow::evaluate_after_change(&inp, c, &mut self.partials, &self.kept, &self.changed);
+            // for the evaluation right after the change only
+            self.kept.clear();
+            self.changed.clear();
+        }
     }
 
     /// The assembly (serial, in boundary-node order) after

@@ -667,6 +667,108 @@ mod tests {
         sim
     }
 
+    /// [`softened_row_plate`]'s softening on `sim`'s plate (elements 8–23
+    /// of the first 32; any others untouched).
+    fn soften_row(sim: &mut Simulation) {
+        let law = sim.materials[0].plastic.expect("plastic law");
+        let band = 0.25;
+        let kappa = 1.5 * law.tensile_strength / law.softening_modulus(band);
+        for e in 8..24 {
+            let st = &mut sim.elems.state[e];
+            st.crack_band = band;
+            st.kappa = kappa;
+            st.direction_code = DirectionCode::of_angle(std::f64::consts::FRAC_PI_2);
+        }
+        let m = sim.elems.conn.len();
+        let fr = sim.fracture.as_mut().unwrap();
+        fr.factor_seen = (0..m).map(|e| if (8..24).contains(&e) { 0.5 } else { 0.0 }).collect();
+    }
+
+    /// The plate with a 1 × ¼ block of 4 × 1 cells on it, shifted by 0.1 m
+    /// sideways, set 0.1 mm above its top face and moving down at 1 m/s,
+    /// without contact damping: after a few steps the block's bottom and
+    /// the plate's top are in contact, away from the plate's row `y = ½`.
+    fn plate_under_a_block() -> ModelSpec {
+        let mut spec = plate();
+        let n = 4;
+        let base = spec.points.len() as u64;
+        let id = |i: usize, j: usize| base + (j * (n + 1) + i) as u64;
+        for j in 0..=1 {
+            for i in 0..=n {
+                spec.points.push([0.1 + i as f64 / n as f64, 1.0 + 1e-4 + 0.25 * j as f64]);
+            }
+        }
+        for i in 0..n {
+            spec.triangles.push([id(i, 0), id(i + 1, 0), id(i + 1, 1)]);
+            spec.triangles.push([id(i, 0), id(i + 1, 1), id(i, 1)]);
+        }
+        spec.element_material = vec![0; spec.triangles.len()];
+        let velocity = |v: usize| if v as u64 >= base { [0.0, -1.0] } else { [0.0; 2] };
+        spec.initial_velocity = Some((0..spec.points.len()).map(velocity).collect());
+        spec.contact.as_mut().unwrap().laws[0].damping_ratio = 0.0;
+        spec
+    }
+
+    /// After an insertion, the contacts away from it keep the step's
+    /// evaluation instead of being evaluated again
+    /// (`narrow::evaluate_after_change`): without contact damping (whose
+    /// estimate depends on the step) they must be what an evaluation of
+    /// every node at the same positions gives, with the same count and
+    /// held energy, to round-off (1e-12 relative; the tangential spring is
+    /// clamped to the friction limit and stored as a gap, whose force can
+    /// differ in the last bit). The slip flag is the step's.
+    #[test]
+    fn contacts_kept_over_an_insertion_are_those_of_a_fresh_evaluation() {
+        let mut sim = Simulation::new(plate_under_a_block(), 1).unwrap();
+        sim.set_elastic_stage(true);
+        for _ in 0..100 {
+            if sim.contact_stats.contacts >= 4 {
+                break;
+            }
+            sim.step(1).unwrap();
+        }
+        assert!(sim.contact_stats.contacts >= 4, "{} contacts", sim.contact_stats.contacts);
+        sim.set_elastic_stage(false);
+        soften_row(&mut sim);
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs());
+        let (mut changes, mut kept) = (0, 0);
+        for _ in 0..5 {
+            if !sim.fracture_check() {
+                continue;
+            }
+            changes += 1;
+            let c = sim.contact.as_ref().unwrap();
+            kept += c.partials.iter().map(|p| p.kept).sum::<u64>();
+            let after = (c.states.clone(), c.corner_states.clone(), c.out.clone(), c.corner_out.clone());
+            let (contacts, stored) = (sim.contact_stats.contacts, sim.energies.contact_elastic);
+            // every node evaluated again at the same positions, without slip
+            sim.refresh_forces();
+            let c = sim.contact.as_ref().unwrap();
+            assert_eq!(c.partials.iter().map(|p| p.kept).sum::<u64>(), 0);
+            assert_eq!(sim.contact_stats.contacts, contacts, "after change {changes}");
+            assert!(
+                close(sim.energies.contact_elastic, stored),
+                "{} J/m, {stored} J/m kept",
+                sim.energies.contact_elastic
+            );
+            for (fresh, kept) in [(&c.states, &after.0), (&c.corner_states, &after.1)] {
+                for (b, (s, k)) in fresh.iter().zip(kept).enumerate() {
+                    let same = (s.facet, s.resumed, s.depth) == (k.facet, k.resumed, k.depth);
+                    assert!(same && close(s.elastic_gap, k.elastic_gap), "node {b}: {s:?}, kept {k:?}");
+                }
+            }
+            for (fresh, kept) in [(&c.out, &after.2), (&c.corner_out, &after.3)] {
+                for (b, (s, k)) in fresh.iter().zip(kept).enumerate() {
+                    let same = (s.facet, s.xi, s.gap, s.dashpot, s.normal_force, s.ends)
+                        == (k.facet, k.xi, k.gap, k.dashpot, k.normal_force, k.ends);
+                    assert!(same && close(s.tangential_force, k.tangential_force), "node {b}: {s:?}, kept {k:?}");
+                }
+            }
+        }
+        assert!(changes >= 2, "{changes} insertion checks changed the mesh");
+        assert!(kept >= 4, "{kept} contacts kept");
+    }
+
     /// Every node of the row `y = ½` is due at once (its elements fully
     /// softened, σ1 vertical: a horizontal crack along the grid's edges),
     /// but neighbours share elements, so one check inserts only some of them

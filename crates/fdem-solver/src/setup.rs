@@ -211,7 +211,7 @@ impl Simulation {
         });
         let pressure = resolve_pressures(&surface, &spec.pressures, &ancestor, true).map_err(SetupError::Invalid)?;
         if let Some(c) = &mut contact {
-            c.adopt(None, &surface, &[], &[]);
+            c.adopt(None, &surface, &[], &[], None);
         }
 
         let mut v = vec![[0.0; 2]; n];

@@ -261,7 +261,7 @@ impl crate::simulation::Simulation {
         self.pressure_force.clear();
         self.pressure_force.resize(nb, [0.0; 2]);
         if let Some(c) = &mut self.contact {
-            c.adopt(Some(&self.surface), &surface, &self.nodes.x, origins);
+            c.adopt(Some(&self.surface), &surface, &self.nodes.x, origins, touched);
             self.contact_force.clear();
             self.contact_force.resize(nb, [0.0; 2]);
             self.contact_damping_force.clear();
