@@ -313,6 +313,21 @@ impl ContactModel {
             for (k, f) in new.facets.iter().enumerate() {
                 facet_of_key[f.key as usize] = k as u32;
             }
+            // A node split by this change and its copies are one node cut in
+            // pieces, and which piece keeps the id (and the facets ending
+            // there) depends on how the mesh is numbered
+            // (docs/renumbering.md): so all of them resume their contacts,
+            // and a facet joins the same two nodes as before when each end
+            // is the old one or a copy of it. (With the piece that kept the
+            // id continuing its contacts, and the facets that kept it too,
+            // a renumbered run went on differently after an insertion that
+            // split a node in contact.)
+            let mut split: Vec<u32> = origins.iter().map(|&(_, o)| o).collect();
+            split.sort_unstable();
+            split.dedup();
+            let origin_of = |v: u32| origins.binary_search_by_key(&v, |&(n, _)| n).ok().map(|i| origins[i].1);
+            let same_ends =
+                |now: [u32; 2], then: [u32; 2]| (0..2).all(|i| now[i] == then[i] || origin_of(now[i]) == Some(then[i]));
             // the touched nodes as bits, and the facets with a touched end:
             // a facet none of whose ends was touched is the same facet, with
             // the same neighbours, as before (its two nodes kept their
@@ -398,53 +413,78 @@ impl ContactModel {
                     }
                     let faces = new.faces[b];
                     let single = faces[0] == NONE;
+                    // a smooth node's second memory is empty
+                    debug_assert!(!single || from[1].is_none());
                     let (slot0, slot1) = slots;
-                    // each old contact carried on in its own slot, on its
-                    // own facet
-                    let mut same = [false; 2];
-                    let mut moved = false;
+                    if stays {
+                        // Neither the node nor its facets changed, so its
+                        // faces are the same facets, with the same normals
+                        // to the bit: each contact goes on in its own slot,
+                        // which is what the rule below picks (but for a
+                        // node whose facets' normals cancel exactly, which
+                        // it would leave without contact), on its facet
+                        // where that is still there, without working out
+                        // any normal (most of an insertion's contact memory
+                        // when it did, 3 ms on one thread late in the
+                        // paper-scale run). Kept whole when every contact's
+                        // facet is untouched too.
+                        let mut whole = true;
+                        let mut carried = [None; 2];
+                        for (k, slot) in [slot0, slot1].into_iter().enumerate() {
+                            let Some((s, depth, ob, _)) = from[k] else { continue };
+                            let of = &old.facets[s.facet as usize];
+                            let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
+                            if f != NONE && same_ends(new.facets[f as usize].nodes, of.nodes) {
+                                *slot = ContactState { facet: f, resumed: NONE, elastic_gap: s.elastic_gap, depth };
+                                whole &= changed[f as usize] == 0;
+                                carried[k] = Some((f, ob));
+                            } else {
+                                *slot = resumed(s, depth);
+                                whole = false;
+                            }
+                        }
+                        if whole {
+                            // kept: the step's contacts go on, on the
+                            // facets' new indices
+                            *keep = 1;
+                            let (record0, record1) = records;
+                            for (k, record) in [record0, record1].into_iter().enumerate() {
+                                if let Some((f, ob)) = carried[k] {
+                                    let c = &old_out[k][ob];
+                                    debug_assert_eq!(c.facet, from[k].map_or(NONE, |o| o.0.facet));
+                                    *record = NodeContact { facet: f, ends: new.facets[f as usize].ends, ..*c };
+                                }
+                            }
+                        }
+                        return;
+                    }
                     for (k, slot) in [slot0, slot1].into_iter().enumerate().take(if single { 1 } else { 2 }) {
                         let key = if single { NONE } else { new.facets[faces[k] as usize].key };
                         let same_face = |o: &Old| {
                             o.is_some_and(|(_, _, _, face)| face != NONE && old.facets[face as usize].key == key)
                         };
-                        let pick = from.iter().position(same_face).or_else(|| {
+                        let pick = from.iter().find(|o| same_face(o)).copied().flatten().or_else(|| {
                             // the old contact whose face points most nearly the same way
                             let n = if single { new.mean_normal(x, b) } else { new.facet_normal(x, faces[k]) };
                             let dot = |o: &(ContactState, f64, usize, u32)| {
                                 let m = old_normal(o);
                                 m[0] * n[0] + m[1] * n[1]
                             };
-                            (0..2)
-                                .filter(|&j| from[j].as_ref().is_some_and(|o| dot(o) > 0.0))
-                                .max_by(|&p, &q| dot(&from[p].unwrap()).total_cmp(&dot(&from[q].unwrap())))
+                            from.iter()
+                                .flatten()
+                                .filter(|o| dot(o) > 0.0)
+                                .max_by(|p, q| dot(p).total_cmp(&dot(q)))
+                                .copied()
                         });
-                        let Some(j) = pick else { continue };
-                        let (s, depth, ..) = from[j].expect("a picked contact");
+                        let Some((s, depth, ..)) = pick else { continue };
                         let of = &old.facets[s.facet as usize];
                         let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
-                        *slot = if !created && f != NONE && new.facets[f as usize].nodes == of.nodes {
-                            same[j] |= j == k && changed.get(f as usize).is_some_and(|&c| c == 0);
-                            moved |= j != k;
+                        let pieces = created || split.binary_search(&node).is_ok();
+                        *slot = if !pieces && f != NONE && same_ends(new.facets[f as usize].nodes, of.nodes) {
                             ContactState { facet: f, resumed: NONE, elastic_gap: s.elastic_gap, depth }
                         } else {
                             resumed(s, depth)
                         };
-                    }
-                    if !(stays && !moved && (0..2).all(|j| from[j].is_none() || same[j])) {
-                        return;
-                    }
-                    // kept: the step's contacts go on, on the facets' new
-                    // indices
-                    *keep = 1;
-                    let (record0, record1) = records;
-                    for (k, record) in [record0, record1].into_iter().enumerate() {
-                        if let Some((s, _, ob, _)) = from[k] {
-                            let c = &old_out[k][ob];
-                            debug_assert_eq!(c.facet, s.facet, "a contact's record and memory on the same facet");
-                            let f = facet_of_key[old.facets[c.facet as usize].key as usize];
-                            *record = NodeContact { facet: f, ends: new.facets[f as usize].ends, ..*c };
-                        }
                     }
                 },
             );
