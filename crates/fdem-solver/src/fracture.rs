@@ -653,17 +653,7 @@ mod tests {
     /// every node of the row y = ½ is due at once.
     fn softened_row_plate() -> Simulation {
         let mut sim = Simulation::new(plate(), 1).unwrap();
-        let law = sim.materials[0].plastic.expect("plastic law");
-        let band = 0.25;
-        let kappa = 1.5 * law.tensile_strength / law.softening_modulus(band);
-        for e in 8..24 {
-            let st = &mut sim.elems.state[e];
-            st.crack_band = band;
-            st.kappa = kappa;
-            st.direction_code = DirectionCode::of_angle(std::f64::consts::FRAC_PI_2);
-        }
-        let fr = sim.fracture.as_mut().unwrap();
-        fr.factor_seen = (0..32).map(|e| if (8..24).contains(&e) { 0.5 } else { 0.0 }).collect();
+        soften_row(&mut sim);
         sim
     }
 
