@@ -424,10 +424,11 @@ impl ContactModel {
                     }
                     let faces = new.faces[b];
                     let single = faces[0] == NONE;
-                    // a smooth node's second memory is empty
-                    debug_assert!(!single || from[1].is_none());
                     let (slot0, slot1) = slots;
                     if stays {
+                        // the same faces as before: a smooth node's second
+                        // memory is empty
+                        debug_assert!(!single || from[1].is_none());
                         // Neither the node nor its facets changed, so its
                         // faces are the same facets, with the same normals
                         // to the bit: each contact goes on in its own slot,
