@@ -133,6 +133,9 @@ impl ContactModel {
         // the evaluation after every change clears it, and renumbering
         // comes after one
         debug_assert!(self.states.iter().chain(&self.corner_states).all(|s| s.resumed == NONE));
+        // likewise the flags of the evaluation after a change, by the
+        // boundary index of before
+        debug_assert!(self.kept.is_empty() && self.changed.is_empty());
         for states in [&mut self.states, &mut self.corner_states] {
             states.iter_mut().for_each(|s| s.facet = facet(s.facet));
             scatter(states, b_map);
@@ -339,18 +342,17 @@ impl ContactModel {
             // a facet none of whose ends was touched is the same facet, with
             // the same neighbours, as before (its two nodes kept their
             // elements)
-            let mut hit = Vec::new();
-            if let Some(touched) = touched {
-                hit.resize(x.len().div_ceil(64), 0u64);
-                for &v in touched {
-                    hit[v as usize / 64] |= 1 << (v % 64);
-                }
-                let hit = &hit;
-                let is_hit = |v: u32| (hit[v as usize / 64] >> (v % 64)) & 1 == 1;
+            // (without `touched` none are flagged, and `changed` stays
+            // empty: then no node is untouched, below)
+            let mut hit = vec![0u64; if touched.is_some() { x.len().div_ceil(64) } else { 0 }];
+            for &v in touched.unwrap_or_default() {
+                hit[v as usize / 64] |= 1 << (v % 64);
+            }
+            let is_hit = |v: u32| (hit[v as usize / 64] >> (v % 64)) & 1 == 1;
+            if touched.is_some() {
                 self.changed
                     .par_extend(new.facets.par_iter().map(|f| u8::from(is_hit(f.nodes[0]) || is_hit(f.nodes[1]))));
             }
-            let is_hit = |v: u32| hit.get(v as usize / 64).is_none_or(|w| (w >> (v % 64)) & 1 == 1);
             let changed = &self.changed;
             let old_states = [&self.states, &self.corner_states];
             let old_out = [&self.out, &self.corner_out];
