@@ -22,8 +22,11 @@ class Interface:
     friction : float
         Friction angle φ_j (degrees), ``0 <= friction < 90``; μ = tan φ_j.
     cohesion : float
-        Cohesion c_j (Pa), ``>= 0``. A node's cohesion force is c_j times its
-        tributary length on the interface (half of each adjacent facet).
+        Cohesion c_j (Pa), ``>= 0``. The interface resists slip with c_j per
+        unit length of contact on top of friction, whichever side's nodes
+        touch the other's facets: a node carries c_j times its tributary
+        length (half of each adjacent facet) where only its side presses,
+        half of that where the other side's nodes press back on it.
     damping : float
         Damping ratio ξ of the normal dashpot ``ξ · 2√(α_n μ)`` (0.5 in the
         paper; μ the reduced mass of the node and the facet), ``>= 0``. It

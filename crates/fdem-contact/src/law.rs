@@ -15,8 +15,10 @@ pub struct InterfaceLaw {
     /// Friction coefficient `μ = tan φ_j` (−).
     pub friction: f64,
     /// Cohesion `c_j` (Pa). The interface resists slip with `c_j` per unit
-    /// length on top of friction; with two-pass contact each side's nodes
-    /// carry half of it (`½ c_j` × tributary length each).
+    /// length on top of friction: a node carries `c_j` × its tributary
+    /// length where only its side presses on the other, half of that where
+    /// the other side's nodes press on its facets too (two-pass contact;
+    /// `narrow::cohesive_length`).
     pub cohesion: f64,
     /// Damping ratio `ξ` of the normal dashpot `ξ · 2√(α_n m)` (−).
     pub damping_ratio: f64,

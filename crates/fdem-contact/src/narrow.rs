@@ -372,6 +372,47 @@ fn tributary(surface: &Surface, frames: &[FacetFrame], b: usize, n: Vec2) -> f64
         .sum()
 }
 
+/// The length (m) over which boundary node `b`'s contact on facet `f`
+/// (outward normal `n`) carries the interface's cohesion: its tributary
+/// length (of its bearing face `face` at a corner, else of all its facets),
+/// each own facet's half counted in full where only this node's side
+/// presses on the other, and half where the other side's nodes press on
+/// this one's facet too (two-pass contact: both passes then carry the same
+/// stretch of interface, and each carries half of it).
+///
+/// Whether the other pass covers the half of own facet `k` is read from the
+/// geometry at this step: an end of the touched facet (the other body's
+/// nearest nodes) penetrates facet `k` within its span. Node on node, a
+/// coincident node penetrates both own facets at their shared vertex;
+/// nodes of one side between those of the other penetrate the facets they
+/// lie on; a block on one long facet of another body has no node of that
+/// body on its facets and carries all of `c ℓ` itself. With `½ c ℓ` for
+/// every node regardless, a block on a single long facet carried half its
+/// cohesion (issue 32: it slid at +0.50 m/s² against 1.36 m/s² due).
+#[inline]
+fn cohesive_length(inp: &NarrowInputs<'_>, b: usize, f: u32, n: Vec2, face: Option<u32>) -> f64 {
+    let frame = &inp.frames[f as usize];
+    let ends = [frame.a, [frame.a[0] + frame.len * frame.t[0], frame.a[1] + frame.len * frame.t[1]]];
+    let half = |k: u32| {
+        let own = &inp.frames[k as usize];
+        let m = own.normal();
+        let h = 0.5 * inp.surface.facets[k as usize].length * (-(m[0] * n[0] + m[1] * n[1])).max(0.0);
+        let covered = ends.iter().any(|&p| {
+            let (xi, gap) = own.project(p, own.a);
+            projects_inside(xi, gap, own.depth)
+        });
+        if covered {
+            0.5 * h
+        } else {
+            h
+        }
+    };
+    match face {
+        Some(k) => half(k),
+        None => inp.surface.node_facets.row(b).iter().map(|&k| half(k)).sum(),
+    }
+}
+
 /// At a shallow convex corner of the surface (a turn of less than 30°), the
 /// signed gap (negative inside) of point `s` from the line of the facet
 /// that follows facet `f` past its end (`at_end`) or precedes it before its
@@ -952,11 +993,7 @@ fn respond(
         0.0
     };
     let slip = inp.dt * (vrel[0] * t[0] + vrel[1] * t[1]);
-    // Contact is two-pass: the nodes of each side press on the facets of the
-    // other, so along an interface both sides' nodes carry cohesion. Each
-    // carries half, so that the interface as a whole resists c_j × length
-    // (the normal forces need no such care: the passes share the load).
-    let cohesion = 0.5 * law.cohesion * trib;
+    let cohesion = if law.cohesion > 0.0 { law.cohesion * cohesive_length(inp, b, f, n, face) } else { 0.0 };
     let (ft, new_gap, work) = friction_update(law, alpha_t, elastic_gap, slip, normal_force, cohesion);
     *state = ContactState { facet: f, resumed: NONE, elastic_gap: new_gap, depth: -gap };
     acc.contacts += 1;
