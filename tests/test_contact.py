@@ -346,3 +346,65 @@ def test_contact_dashpot_costs_the_stable_step_nothing_and_damps_an_impact():
             assert e["contact_damping"] > 0.0
     assert crit[0.5] == crit[0.0]
     assert 0.0 < leaving[0.5] < leaving[0.0] <= 1.0 + 1e-6, leaving
+
+
+def colliding_bars(law: fdem.Interface, v_rel: float = 1.0, nx: int = 100):
+    """Two equal elastic bars 1 m × 0.1 m (``nx`` × 2 cells, roller top and
+    bottom) meeting at ``v_rel``; returns (model, initial kinetic energy)."""
+    length, height = 1.0, 0.1
+    left = fdem.Mesh.rectangle(length, height, nx, 2, origin=(-length, 0.0))
+    right = fdem.Mesh.rectangle(length, height, nx, 2, origin=(0.0, 0.0))
+    mesh = fdem.Mesh.combine(left, right, prefixes=("l_", "r_"))
+    model = fdem.Model(mesh, material=ROCK)
+    for side in ("l_top", "l_bottom", "r_top", "r_bottom"):
+        model.fix(side, x=False, y=True)
+    vx = np.full(mesh.n_nodes, -0.5 * v_rel)
+    vx[: left.n_nodes] = 0.5 * v_rel
+    model.set_initial_velocity(np.column_stack([vx, np.zeros_like(vx)]))
+    model.contact(law)
+    return model, 0.5 * ROCK.rho * 2 * length * height * (0.5 * v_rel) ** 2
+
+
+@pytest.mark.parametrize(
+    "law",
+    [
+        fdem.Interface(friction=0.0, damping=0.0, penalty_factor=1.0),
+        fdem.Interface(friction=0.0, damping=0.0, penalty_factor=20.0),
+        fdem.Interface(friction=0.0, damping=0.0, penalty_factor=100.0),
+        # the same as the factor 20 given as a stiffness (E / h̄, h̄ = 0.01 m)
+        fdem.Interface(friction=0.0, damping=0.0, normal_stiffness=20 * ROCK.E / 0.01),
+    ],
+    ids=["p1", "p20", "p100", "k_n"],
+)
+def test_undamped_impact_keeps_its_energy_at_the_default_step(law):
+    """Two bars collide without any damping and part again: after the
+    contact (2L/c) kinetic plus elastic energy equal the initial kinetic
+    energy within 1%, at the default settings, for penalties from E/h to
+    100 E/h (issue 32: at factor 20 the bars left with 3.2 times the energy
+    they brought). A stiff penalty spring resolved in a step or two makes
+    the face nodes rattle, and every contact onset changes the energy by
+    up to (ω_c Δt)²/4 of the node's: the default step keeps ω_c Δt ≤ s."""
+    model, e0 = colliding_bars(law)
+    sim = fdem.Simulation(model)
+    sim.run(until=4.0 / ROCK.p_wave_speed, progress=False, checkpoint=False)
+    e = sim.energies()
+    assert sim.contacts()["normal_force"].sum() == 0.0  # parted
+    assert e["kinetic"] + e["elastic"] == pytest.approx(e0, rel=0.01)
+    assert abs(e["residual"]) < 0.01 * e0
+
+
+def test_the_watchdog_stops_an_impact_that_creates_energy():
+    """The same impact at the step the default took before issue 32 (twice
+    today's: the contact at ω_c Δt = 1.6) gains energy in the rattling
+    contact: the watchdog stops it at its default threshold, 5% of the
+    balance's largest term created (it used to wait for a sixteenfold
+    growth of the held energy, and the run ended with 3.2 times the energy
+    it started with)."""
+    model, e0 = colliding_bars(fdem.Interface(friction=0.0, damping=0.0, penalty_factor=20.0))
+    dt = 2.0 * fdem.Simulation(model).time_step
+    sim = fdem.Simulation(model, dt=dt)
+    with pytest.raises(fdem.EnergyGrowthError) as info:
+        sim.run(until=4.0 / ROCK.p_wave_speed, progress=False, checkpoint=False)
+    err = info.value
+    assert err.created > 0.05 * err.largest
+    assert err.created < 0.5 * e0  # caught early, not after the damage

@@ -79,7 +79,7 @@ class Simulation:
         safety: float = 0.8,
         fixed_dt: float | None = None,
         dt_interval: int = 100,
-        energy_growth: float = 0.1,
+        energy_growth: float = 0.05,
         mass_scaling: float | None = None,
         renumber: float | None = None,
         threads: int = 0,
@@ -101,7 +101,7 @@ class Simulation:
         safety: float,
         fixed_dt: float | None,
         dt_interval: int,
-        energy_growth: float = 0.1,
+        energy_growth: float = 0.05,
         mass_scaling: float | None = None,
         renumber: float | None = None,
     ) -> None: ...

@@ -134,7 +134,7 @@ fn run_error(py: Python<'_>, e: RunError) -> PyErr {
             RunError::NonFinite { node, quantity, step, time } => {
                 errors.getattr("NonFiniteError")?.call1((msg.clone(), node, quantity, step, time))?
             }
-            RunError::EnergyGrowth { created, largest, step, time } => {
+            RunError::EnergyGrowth { created, largest, step, time, .. } => {
                 errors.getattr("EnergyGrowthError")?.call1((msg.clone(), created, largest, step, time))?
             }
         };
@@ -187,7 +187,7 @@ impl PySimulation {
         contact_laws=None, contact_facets=None, contact_facet_laws=None, crack_law=0, contact_margin=None,
         fracture_interval=0, fracture_edge_tolerance=15.0, fracture_crack_tolerance=30.0, fracture_min_quality=0.2, fracture_min_altitude=0.0, fracture_insert_at=0.02,
         stage_times=Vec::new(), stage_elements=Vec::new(),
-        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.1, mass_scaling=None, renumber=None, threads=0
+        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.05, mass_scaling=None, renumber=None, threads=0
     ))]
     fn new(
         points: PyReadonlyArray2<'_, f64>,
@@ -477,7 +477,7 @@ impl PySimulation {
     }
 
     /// Replaces the run settings between stages.
-    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth=0.1, mass_scaling=None, renumber=None))]
+    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth=0.05, mass_scaling=None, renumber=None))]
     #[allow(clippy::too_many_arguments)]
     fn set_settings(
         &mut self,

@@ -70,6 +70,9 @@ pub enum RunError {
         created: f64,
         /// The largest term of the balance (J per unit thickness).
         largest: f64,
+        /// The held energy (kinetic + elastic, J per unit thickness) at the
+        /// check before and at this one.
+        held: [f64; 2],
         /// The step at which the check found it.
         step: u64,
         /// Simulated time (s).
@@ -88,12 +91,15 @@ impl std::fmt::Display for RunError {
             RunError::NonFinite { node, quantity, step, time } => {
                 write!(f, "{quantity} of node {node} became NaN or infinite at step {step}, time {time:.6e} s")
             }
-            RunError::EnergyGrowth { created, largest, step, time } => write!(
+            RunError::EnergyGrowth { created, largest, held, step, time } => write!(
                 f,
                 "energy grew without a source at step {step}, time {time:.6e} s: the balance shows {created:.4e} J \
-                 created, {:.1}% of its largest term ({largest:.4e} J); the run is unstable (reduce the \
-                 time-step safety factor or the contact stiffness)",
-                100.0 * created / largest
+                 created, {:.1}% of its largest term ({largest:.4e} J; kinetic + elastic {:.4e} J, {:.4e} J at the \
+                 check before); the run is unstable or a contact creates energy (reduce the time-step safety \
+                 factor or the contact stiffness; the threshold is the energy_growth setting)",
+                100.0 * created / largest,
+                held[1],
+                held[0]
             ),
         }
     }

@@ -139,6 +139,21 @@ impl Simulation {
         (0..self.n_nodes()).map(|i| self.whole_step_velocity(i)).collect()
     }
 
+    /// `Σ ½ m |vⁿ − v^{n−½}|²` (J per unit thickness): how much the
+    /// whole-step kinetic energy exceeds the half-step product `½ m
+    /// v^{n−½}·v^{n+½}` that the central-difference scheme conserves with
+    /// the elastic energy (for linear undamped motion, exactly; its
+    /// accumulated work pairs forces with the centred displacements). Large
+    /// only for modes near the stability limit.
+    pub(crate) fn kinetic_lag(&self) -> f64 {
+        (0..self.n_nodes())
+            .map(|i| {
+                let (w, h) = (self.whole_step_velocity(i), self.nodes.v[i]);
+                0.5 * self.nodes.mass[i] * ((w[0] - h[0]) * (w[0] - h[0]) + (w[1] - h[1]) * (w[1] - h[1]))
+            })
+            .sum()
+    }
+
     /// The whole-step velocity of node `i` (see [`Self::velocities`]),
     /// without allocating: the energy watchdog evaluates it inside the
     /// time loop.
