@@ -276,6 +276,9 @@ pub(crate) struct ElementInputs<'a> {
     pub material: &'a [u32],
     pub active: &'a [bool],
     pub materials: &'a [Material],
+    /// Active elements per node: an element that holds two of its nodes
+    /// alone is a fragment ([`fragment`]).
+    pub node_elems: &'a Csr,
     pub beta: f64,
     /// The step just taken, `Δt^{n+½}` (s); zero to only recompute forces.
     pub dt: f64,
@@ -286,6 +289,20 @@ pub(crate) struct ElementInputs<'a> {
 #[inline(always)]
 fn gather<T: Copy>(a: &[T], t: [u32; 3]) -> [T; 3] {
     [a[t[0] as usize], a[t[1] as usize], a[t[2] as usize]]
+}
+
+/// Whether the element with nodes `t` is a fragment of its own: two of its
+/// nodes (and so all three of its edges) belong to it alone, so that it is
+/// either a lone triangle or hangs from the rest by one node. Such an
+/// element is elastic (its plastic law is not applied): a crack through it
+/// can no longer be inserted as a split (it would leave pieces under the
+/// size limit, or simply detach it), so softening would only let its nodes
+/// drift apart as particles joined by nothing in tension (docs/fracture.md,
+/// "Fragments of one element").
+#[inline(always)]
+pub(crate) fn fragment(node_elems: &Csr, t: [u32; 3]) -> bool {
+    let private = |v: u32| node_elems.offsets[v as usize + 1] - node_elems.offsets[v as usize] == 1;
+    u8::from(private(t[0])) + u8::from(private(t[1])) + u8::from(private(t[2])) >= 2
 }
 
 /// Element pass: stress update to `σ̂^{n+1}` and internal forces at `x^{n+1}`.
@@ -337,7 +354,7 @@ pub(crate) fn element_pass(
                     let old = sc[j];
                     let mut new = mat.elastic.trial(old, dh, inp.dt);
                     let half_area = 0.5 * frames.twice_area_mid[l];
-                    if let (true, Some(law)) = (inp.plastic, &mat.plastic) {
+                    if let (true, Some(law), false) = (inp.plastic, &mat.plastic, fragment(inp.node_elems, conn[l])) {
                         let u = law.update(old, new, &mut stc[j], || reference_geometry(&inp.reference[e]));
                         new = u.stress;
                         acc.plastic += half_area * u.plastic_dissipation;

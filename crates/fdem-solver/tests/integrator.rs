@@ -139,3 +139,82 @@ fn same_bits_for_any_thread_count() {
     assert!(a.0 == b.0 && a.1 == b.1);
     assert_eq!(a.2, b.2);
 }
+
+/// A body of `triangles` over `points` of a softening rock (f_t 0.1 MPa,
+/// G_f 10 N/m: fully softened at 2×10⁻⁴ of strain in an element 1 m
+/// wide) whose nodes all move apart from the centroid at 10 /s.
+fn expanding(points: Vec<[f64; 2]>, triangles: Vec<[u64; 3]>) -> Simulation {
+    let c = [
+        points.iter().map(|p| p[0]).sum::<f64>() / points.len() as f64,
+        points.iter().map(|p| p[1]).sum::<f64>() / points.len() as f64,
+    ];
+    let v = points.iter().map(|p| [10.0 * (p[0] - c[0]), 10.0 * (p[1] - c[1])]).collect();
+    let m = triangles.len();
+    let spec = ModelSpec {
+        points,
+        triangles,
+        materials: vec![MaterialSpec {
+            density: 2000.0,
+            young: 1e9,
+            poisson: 0.25,
+            law: LawSpec::MohrCoulombRankine {
+                cohesion: 1e7,
+                friction: 0.5,
+                dilation: 0.0,
+                tensile_strength: 1e5,
+                fracture_energy: 10.0,
+                crack_band: fdem_solver::CrackBand::Oliver,
+            },
+        }],
+        element_material: vec![0; m],
+        initial_velocity: Some(v),
+        ..Default::default()
+    };
+    Simulation::new(spec, 1).unwrap()
+}
+
+/// Longest edge of each element (m).
+fn longest_edges(sim: &Simulation) -> Vec<f64> {
+    let x = sim.positions();
+    sim.triangles()
+        .iter()
+        .map(|t| {
+            (0..3)
+                .map(|k| {
+                    let (p, q) = (x[t[k] as usize], x[t[(k + 1) % 3] as usize]);
+                    ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt()
+                })
+                .fold(0.0, f64::max)
+        })
+        .collect()
+}
+
+#[test]
+fn a_triangle_of_its_own_holds_together_where_a_softened_one_would_drift_apart() {
+    // A fully softened element carries no tension: its nodes move as
+    // particles joined by nothing but compression. Within a body its
+    // crack is inserted and the pieces separate; a triangle of its own
+    // cannot be split further, and softened it drifted apart without
+    // bound (issue 32: lone triangles at the caving run's undercut edges
+    // drawn out 80–90 times into needles). Such an element is elastic
+    // (`passes::fragment`): pulled apart at 10 /s it rings about its own
+    // size (the energy watchdog, on by default, sees no energy made).
+    let mut lone = expanding(vec![[0.0, 0.0], [1.0, 0.0], [0.3, 0.9]], vec![[0, 1, 2]]);
+    let l0 = longest_edges(&lone)[0];
+    lone.step(2_000).unwrap();
+    assert!(lone.time() > 1.0, "{}", lone.time());
+    let l = longest_edges(&lone)[0];
+    // drifting at 10 /s it would be 11 times its size by now
+    assert!((l / l0 - 1.0).abs() < 0.01, "longest edge {l} against {l0}");
+    assert_eq!(lone.failure_factors()[0], 0.0, "a fragment softened");
+
+    // the same pull on a body of two elements, whose nodes each belong to
+    // both or to one: it softens (crack insertion is off here) and its
+    // elements drift apart with the nodes
+    let mut body = expanding(vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], vec![[0, 1, 2], [0, 2, 3]]);
+    let l0 = longest_edges(&body);
+    body.step(2_000).unwrap();
+    let l = longest_edges(&body);
+    assert!(body.failure_factors().iter().all(|&f| f >= 1.0), "{:?}", body.failure_factors());
+    assert!(l.iter().zip(&l0).all(|(a, b)| a / b > 5.0), "{l:?} against {l0:?}");
+}
