@@ -114,9 +114,39 @@ impl Bond {
         }
         let dissipated = (self.dissipation(self.max_opening) - before) * self.length;
         let broken = self.max_opening >= self.final_opening;
-        let k = if broken { 0.0 } else { self.secant(self.max_opening) };
+        let k = self.current_secant();
+        BondResponse {
+            force: self.spring_force(k, d),
+            dissipated,
+            elastic: 0.5 * k * delta * delta * self.length,
+            broken,
+        }
+    }
+
+    /// The force on node `b` (N per unit thickness; `a` gets its negative)
+    /// at positions `xa`, `xb` (m) with the damage the bond holds, without
+    /// updating it: at the positions of its last [`update`](Self::update),
+    /// the force that update returned, to the bit (the same expressions).
+    pub fn force(&self, xa: Vec2, xb: Vec2) -> Vec2 {
+        self.spring_force(self.current_secant(), [xb[0] - xa[0], xb[1] - xa[1]])
+    }
+
+    /// Secant stiffness (Pa/m) for the largest opening so far; 0 once broken.
+    #[inline]
+    fn current_secant(&self) -> f64 {
+        if self.max_opening >= self.final_opening {
+            0.0
+        } else {
+            self.secant(self.max_opening)
+        }
+    }
+
+    /// Force on node `b` of a spring of stiffness `k` (Pa/m) over the
+    /// tributary length at the opening `d` (m).
+    #[inline]
+    fn spring_force(&self, k: f64, d: Vec2) -> Vec2 {
         let s = -k * self.length;
-        BondResponse { force: [s * d[0], s * d[1]], dissipated, elastic: 0.5 * k * delta * delta * self.length, broken }
+        [s * d[0], s * d[1]]
     }
 }
 
@@ -151,6 +181,22 @@ mod tests {
         assert!(last.broken);
         let expected = 0.5 * 2e6 * 1e-4 * 0.5;
         assert!((total - expected).abs() < 1e-12 * expected, "{total} vs {expected}");
+    }
+
+    /// `force` without an update gives, at the positions of the last update,
+    /// the force that update gave, bit for bit (what a restored run's
+    /// contact forces are rebuilt with), and changes nothing.
+    #[test]
+    fn force_repeats_the_last_update() {
+        let mut b = bond();
+        let xa = [0.1, -0.2];
+        for (i, &delta) in [0.3e-4, 0.6e-4, 0.2e-4, 0.99e-4].iter().enumerate() {
+            let xb = [xa[0] + 0.6 * delta + 1e-7 * i as f64, xa[1] + 0.8 * delta];
+            let r = b.update(xa, xb);
+            let kept = b;
+            assert_eq!(b.force(xa, xb), r.force);
+            assert_eq!(b, kept);
+        }
     }
 
     /// Unloading is elastic along the secant: energy held, none dissipated.

@@ -434,16 +434,13 @@ impl Simulation {
                     }
                 }
             }
-            // the assembly again, which also finds the damped nodes (the
-            // same forces, in the same order, as the saved ones)
             sim.contact_damped = vec![0; sim.contact_force.len()];
-            let out = crate::contact::AssemblyOut {
-                forces: &mut sim.contact_force,
-                damping: &mut sim.contact_damping_force,
-                damped: &mut sim.contact_damped,
-            };
-            c.reassemble(out);
         }
+        // the assembly again, which also finds the damped nodes, and the
+        // bonds' forces on top, as the step added them: the same forces,
+        // in the same order, as the saved ones (without the bonds' the
+        // restored run lost their forces for a step and diverged)
+        sim.reassemble_surface_forces();
         Ok((sim, user.to_vec()))
     }
 

@@ -104,6 +104,22 @@ impl FractureModel {
     }
 }
 
+/// Adds a bond's force `f` on its node `b` (and `−f` on `a`) to the contact
+/// forces (by boundary node) of `nodes = [a, b]`, when both are on the
+/// surface.
+#[inline]
+fn add_bond_force(force: &mut [Vec2], index_of: &[u32], [a, b]: [u32; 2], f: Vec2) {
+    let (ia, ib) = (index_of[a as usize], index_of[b as usize]);
+    if ia != crate::NONE && ib != crate::NONE {
+        let fa = &mut force[ia as usize];
+        fa[0] -= f[0];
+        fa[1] -= f[1];
+        let fb = &mut force[ib as usize];
+        fb[0] += f[0];
+        fb[1] += f[1];
+    }
+}
+
 /// How well insertions have kept mass and momentum (DESIGN §4.4: both are
 /// unchanged by an insertion).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -387,19 +403,25 @@ impl Simulation {
             let r = bond.update(x[a as usize], x[b as usize]);
             dissipated += r.dissipated;
             elastic += r.elastic;
-            let (ia, ib) = (index_of[a as usize], index_of[b as usize]);
-            if ia != crate::NONE && ib != crate::NONE {
-                let (fa, fb) = (&mut force[ia as usize], r.force);
-                fa[0] -= fb[0];
-                fa[1] -= fb[1];
-                let fb_node = &mut force[ib as usize];
-                fb_node[0] += fb[0];
-                fb_node[1] += fb[1];
-            }
+            add_bond_force(force, index_of, bond.nodes, r.force);
             !r.broken
         });
         self.energies.fracture += dissipated;
         self.energies.cohesive_elastic = elastic;
+    }
+
+    /// Adds the forces of the intact bonds, as the last [`Self::bond_forces`]
+    /// left them (at the same positions, without updating the bonds), to
+    /// the contact forces of their nodes, in the same order: what a rebuild
+    /// of the contact forces from the contact records outside a step
+    /// (restore, renumbering) must add to give the forces the step left.
+    pub(crate) fn add_bond_forces(&mut self) {
+        let Some(fr) = &self.fracture else { return };
+        let (x, index_of) = (&self.nodes.x, &self.surface.index_of);
+        for bond in &fr.bonds {
+            let [a, b] = bond.nodes;
+            add_bond_force(&mut self.contact_force, index_of, bond.nodes, bond.force(x[a as usize], x[b as usize]));
+        }
     }
 
     /// The strength `t₀ = f_t (1 − F)` (Pa) and final opening

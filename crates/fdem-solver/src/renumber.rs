@@ -318,17 +318,12 @@ impl Simulation {
         scatter(&mut self.pressure_force, &b_map);
         if let Some(c) = &mut self.contact {
             c.relabel(&surface, &facet_map, &b_map);
-            // the contact forces added up again in the new order, with the
-            // list of dashpots and their counts per node (the same forces
-            // up to the order of the sums)
-            let out = crate::contact::AssemblyOut {
-                forces: &mut self.contact_force,
-                damping: &mut self.contact_damping_force,
-                damped: &mut self.contact_damped,
-            };
-            c.reassemble(out);
         }
         self.surface = surface;
+        // the contact forces added up again in the new order, with the list
+        // of dashpots and their counts per node, and the bonds' forces (the
+        // same forces up to the order of the sums)
+        self.reassemble_surface_forces();
 
         self.layout.follow(&node_order, &elem_order);
     }

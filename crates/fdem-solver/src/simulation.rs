@@ -307,6 +307,22 @@ impl Simulation {
         self.phase_times.surface += clock.elapsed().as_secs_f64();
     }
 
+    /// The contact forces added up again from the contact records, with the
+    /// damped nodes and the list of dashpots, and the intact bonds' forces
+    /// added as the last step added them: the surface forces the step left,
+    /// rebuilt outside a step (restore, renumbering). Nothing without
+    /// contact (bonds act through the contact forces only).
+    pub(crate) fn reassemble_surface_forces(&mut self) {
+        let Some(c) = self.contact.as_mut() else { return };
+        let out = AssemblyOut {
+            forces: &mut self.contact_force,
+            damping: &mut self.contact_damping_force,
+            damped: &mut self.contact_damped,
+        };
+        c.reassemble(out);
+        self.add_bond_forces();
+    }
+
     /// Re-evaluates the stable step (DESIGN §4.2): `s · min` over the
     /// elements of `2/ω_e` and, with contact, over the boundary nodes of
     /// `2/√(ω_e² + ω_c²)` with `ω_c² = 4 k ℓ / m` (a node's contact spring

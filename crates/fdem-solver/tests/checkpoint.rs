@@ -4,8 +4,8 @@
 mod common;
 use common::square;
 use fdem_solver::{
-    CheckpointError, Constraint, ContactSpec, CrackBand, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Simulation,
-    CHECKPOINT_FORMAT,
+    CheckpointError, Constraint, ContactSpec, CrackBand, FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec,
+    Simulation, CHECKPOINT_FORMAT,
 };
 
 /// A damped, gravity-loaded plate of `n × n` cells, supported at the bottom,
@@ -272,4 +272,107 @@ fn a_format_5_file_reads_without_its_dashpots_and_a_format_6_file_with_them() {
     a.step(40).unwrap();
     c.step(40).unwrap();
     assert!(a.checkpoint_bytes(b"") == c.checkpoint_bytes(b""));
+}
+
+/// A 0.5 m × 0.1 m bar of 25 × 5 cells with contact and crack insertion
+/// (cohesive bonds from a nodal failure factor of 0.02, as the Python
+/// default), its middle column of cells weaker in tension, fixed at its
+/// left end and pulled at its right end at 20 mm/s: cracks open across the
+/// middle with their bonds, which then fail one by one.
+fn bonded_bar() -> ModelSpec {
+    let (nx, ny, h) = (25usize, 5usize, 0.02);
+    let id = |i: usize, j: usize| (j * (nx + 1) + i) as u64;
+    let points = (0..=ny).flat_map(|j| (0..=nx).map(move |i| [i as f64 * h, j as f64 * h])).collect();
+    let (mut triangles, mut element_material) = (Vec::new(), Vec::new());
+    for j in 0..ny {
+        for i in 0..nx {
+            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            element_material.extend([u32::from(i == nx / 2); 2]);
+        }
+    }
+    let rock = |tensile_strength| MaterialSpec {
+        density: 2700.0,
+        young: 10e9,
+        poisson: 0.2,
+        law: LawSpec::MohrCoulombRankine {
+            cohesion: 4e6,
+            friction: 35f64.to_radians(),
+            dilation: 5f64.to_radians(),
+            tensile_strength,
+            fracture_energy: 70.0,
+            crack_band: CrackBand::Oliver,
+        },
+    };
+    let mut constraints = Vec::new();
+    for j in 0..=ny {
+        let fixed = [true, j == 0];
+        constraints.push(Constraint { node: id(0, j) as u32, fixed, value: [0.0; 2], amplitude: None });
+        let pull = [0.02, 0.0];
+        constraints.push(Constraint { node: id(nx, j) as u32, fixed: [true, false], value: pull, amplitude: None });
+    }
+    let mut s = ModelSpec {
+        points,
+        triangles,
+        materials: vec![rock(1.0e6), rock(0.8e6)],
+        element_material,
+        constraints,
+        contact: Some(ContactSpec {
+            laws: vec![InterfaceSpec {
+                normal_stiffness: 1e11,
+                shear_stiffness: 1e11,
+                friction: 30f64.to_radians().tan(),
+                cohesion: 0.0,
+                damping_ratio: 0.5,
+            }],
+            facet_laws: Vec::new(),
+            crack_law: 0,
+            margin: None,
+        }),
+        fracture: Some(FractureSpec { params: Default::default(), interval: 5, insert_at: 0.02 }),
+        ..Default::default()
+    };
+    s.settings.stiffness_damping = 1e-6;
+    s
+}
+
+/// Issue 32 (4): a run with cohesive bonds restores bit for bit from a
+/// checkpoint before its first crack, one right after cracks opened with
+/// their bonds intact, and one just after a bond failed (fewer bonds, no
+/// insertion since), on another thread count: the restored state is the
+/// saved one (its checkpoint the same bytes, so the contact forces hold the
+/// bonds' forces as the step left them), and the runs end equal.
+#[test]
+fn a_run_with_cohesive_bonds_restores_bit_for_bit_before_during_and_after_bond_failure() {
+    let end = 5000;
+    let mut a = Simulation::new(bonded_bar(), 2).unwrap();
+    a.step(300).unwrap();
+    assert_eq!((a.insertions(), a.bonds().len()), (Some(0), 0));
+    let before = a.checkpoint_bytes(b"");
+    while !a.bonds().iter().any(|b| b.max_opening > 0.0) {
+        a.step(10).unwrap();
+        assert!(a.steps() < end, "no crack opened with its bond");
+    }
+    let intact = a.checkpoint_bytes(b"");
+    let mut most = a.bonds().len();
+    loop {
+        let insertions = a.insertions();
+        a.step(10).unwrap();
+        if a.insertions() == insertions && a.bonds().len() < most {
+            break;
+        }
+        most = most.max(a.bonds().len());
+        assert!(a.steps() < end, "no bond failed");
+    }
+    assert!(!a.bonds().is_empty());
+    let failed = a.checkpoint_bytes(b"");
+    a.step(end - a.steps()).unwrap();
+    let reference = a.checkpoint_bytes(b"");
+    for (label, saved) in [("before", before), ("intact", intact), ("failed", failed)] {
+        let (mut b, _) = Simulation::from_checkpoint_bytes(&saved, 1).unwrap();
+        assert!(b.checkpoint_bytes(b"") == saved, "{label}: the restored state is not the saved one");
+        b.step(end - b.steps()).unwrap();
+        assert!(b.checkpoint_bytes(b"") == reference, "{label}: the restored run diverged");
+        assert_eq!(a.energies(), b.energies(), "{label}");
+    }
 }
