@@ -69,28 +69,31 @@ def held(e: dict[str, float]) -> float:
 def test_an_excavation_stage_removes_the_pieces_of_a_set_that_cracked():
     """A set that cracks (its elements split) before its stage leaves no
     element of its area behind: no active element's reference centroid is
-    inside it; the mass left is ρ Σ A of the other set (to 1e-12); the
-    energy balance keeps its residual (the stage changes it by less than
-    1e-6 of the largest term, which the steps around it change by more)."""
-    sim, model = bar(stage=CRACKED + 1e-4)
+    inside it; the mass left is ρ Σ A of the other set (to 1e-12); what
+    left is booked as ``excavated`` (a quarter of the balance's largest
+    term here) and the balance still closes to 1e-3 of its largest term
+    over the next 0.5 ms (measured 3.1e-4; 2.8e-4 without the stage). The
+    exact booking at the removal: the next test."""
+    stage = CRACKED + 1e-4
+    sim, model = bar(stage=stage)
     mesh = model.mesh
     sim.run(until=CRACKED, progress=False)
     pieces = in_set(sim, mesh, "weak") & sim.active()
     assert sim.insertions > 0 and pieces.sum() > len(mesh.elements("weak")) + 10
-    # up to the stage, then one step at a time across it
-    while sim.time < CRACKED + 1e-4:
+    while sim.stages_done == 0:
         sim.step(1)
-    assert sim.stages_done == 0
-    e0 = sim.energies()
-    sim.step(1)
-    assert sim.stages_done == 1
-    e1 = sim.energies()
+    assert stage <= sim.time < stage + 2 * sim.time_step
     left = (in_set(sim, mesh, "weak") & sim.active()).sum()
     assert left == 0, f"{left} elements of the excavated set left"
+    assert np.array_equal(~sim.active(), np.isin(sim.element_origins(), mesh.elements("weak")))
     rest_mass = RHO * mesh.areas()[mesh.elements("rest")].sum()
     assert sim.masses().sum() == pytest.approx(rest_mass, rel=1e-12)
-    assert e1["excavated"] > 0 and e0["excavated"] == 0
-    assert abs(e1["residual"] - e0["residual"]) < 1e-6 * e1["largest_term"]
+    e = sim.energies()
+    assert e["excavated"] > 0.1 * e["largest_term"]
+    while sim.time < stage + 5e-4:
+        sim.step(20)
+        e = sim.energies()
+        assert abs(e["residual"]) < 1e-3 * e["largest_term"], sim.time
 
 
 def test_deactivating_a_set_by_name_after_cracking_removes_its_pieces():
@@ -116,3 +119,99 @@ def test_deactivating_a_set_by_name_after_cracking_removes_its_pieces():
     assert e1["excavated"] - e0["excavated"] == pytest.approx(held(e0) - held(e1), rel=1e-9)
     assert abs(e1["residual"] - e0["residual"]) < 1e-9 * e1["largest_term"]
     assert sim.deactivate("weak") == 0
+
+
+def test_pieces_inherit_their_element_s_sets_and_material():
+    """Every piece's parent was made before it and its origin is a model
+    element; pieces have their origin's material; ``Simulation.elements``
+    lists a set as it is now (exactly the elements whose reference
+    centroid lies in the set's area); the model's element ids remove
+    their pieces too, and ``descendants=False`` exactly the elements
+    named."""
+    sim, model = bar()
+    mesh = model.mesh
+    sim.run(until=CRACKED, progress=False)
+    m0, m = mesh.n_elements, sim.n_elements
+    parents, origins = sim.element_parents(), sim.element_origins()
+    ids = np.arange(m)
+    assert np.array_equal(parents[:m0], ids[:m0]) and np.all(parents[m0:] < ids[m0:])
+    assert np.all(origins < m0) and np.array_equal(origins[parents], origins)
+    materials = model.kernel_arrays()["element_material"]
+    assert np.array_equal(sim._core.element_materials(), materials[origins])
+    weak = sim.elements("weak")
+    assert np.array_equal(weak, np.flatnonzero(in_set(sim, mesh, "weak")))
+    assert len(weak) > len(mesh.elements("weak")) and np.array_equal(sim.elements(mesh.elements("weak")), weak)
+    with pytest.raises(ValueError, match="not an element of the model"):
+        sim.elements([m0])
+    # one model element with pieces: by id with its pieces, or alone
+    cut = int(origins[m0])
+    family = np.flatnonzero(origins == cut)
+    assert len(family) > 1
+    assert sim.deactivate([cut], descendants=False) == 1
+    assert np.array_equal(np.flatnonzero(~sim.active()), [cut])
+    assert sim.deactivate([cut]) == len(family) - 1
+    assert np.array_equal(np.flatnonzero(~sim.active()), family)
+    # a piece's id names that piece and what is cut from it later
+    piece = int(np.setdiff1d(weak, family).max())
+    assert sim.deactivate([piece]) == 1 and not sim.active()[piece]
+
+
+def test_the_lineage_survives_renumbering_and_checkpoints(tmp_path):
+    """Parents and origins read the same after a renumbering and after a
+    restart; a stage after either removes the set's pieces (mass to
+    1e-12), and the restored run is bit for bit the run that went on."""
+    stage = CRACKED + 1e-4
+    sim, model = bar(stage=stage, renumber=0.01)
+    sim.run(until=CRACKED, progress=False)
+    assert sim.renumberings > 0
+    parents, origins = sim.element_parents(), sim.element_origins()
+    sim.renumber()
+    assert np.array_equal(sim.element_parents(), parents) and np.array_equal(sim.element_origins(), origins)
+    path = sim.save_checkpoint(tmp_path / "cracked.ckpt")
+    back = fdem.Simulation.from_checkpoint(path, model, threads=2)
+    assert np.array_equal(back.element_parents(), parents)
+    rest_mass = RHO * model.mesh.areas()[model.mesh.elements("rest")].sum()
+    for s in (sim, back):
+        s.run(until=stage + 1e-4, progress=False)
+        assert s.stages_done == 1 and not (in_set(s, model.mesh, "weak") & s.active()).any()
+        assert s.masses().sum() == pytest.approx(rest_mass, rel=1e-12)
+    assert np.array_equal(sim.positions(), back.positions()) and sim.energies() == back.energies()
+
+
+def without_lineage(path, out, parents: np.ndarray) -> None:
+    """The checkpoint at ``path`` as format 6 wrote it, without the lineage
+    block at the end of its state (postcard: the count and each parent as
+    varints), resealed, at ``out``."""
+    import struct
+    import zlib
+
+    b = open(path, "rb").read()
+    assert b[:8] == b"FDEMCKPT" and struct.unpack_from("<I", b, 8)[0] == 7
+    s_len, u_len = struct.unpack_from("<QQ", b, 16)
+    varint = lambda n: max(1, -(-int(n).bit_length() // 7))  # noqa: E731
+    block = varint(len(parents)) + sum(varint(p) for p in parents)
+    state, user = b[40 : 40 + s_len - block], b[40 + s_len :]
+    head = bytearray(b[:40])
+    struct.pack_into("<I", head, 8, 6)
+    struct.pack_into("<Q", head, 16, len(state))
+    struct.pack_into("<I", head, 32, zlib.crc32(state + user))
+    struct.pack_into("<I", head, 36, zlib.crc32(bytes(head[:36])))
+    open(out, "wb").write(bytes(head) + state + user)
+    assert u_len == len(user)
+
+
+def test_a_checkpoint_without_lineage_gets_it_back_from_the_model(tmp_path):
+    """A format-6 checkpoint (no lineage) of a cracked, renumbered run
+    restores with each piece placed in the model element that holds its
+    reference centroid: the origins are the ones the run kept."""
+    sim, model = bar(renumber=0.01)
+    sim.run(until=CRACKED, progress=False)
+    origins = sim.element_origins()
+    assert sim.n_elements > model.mesh.n_elements and sim.renumberings > 0
+    path = sim.save_checkpoint(tmp_path / "v7.ckpt")
+    without_lineage(path, tmp_path / "v6.ckpt", sim.element_parents())
+    raw, _ = fdem._core.Simulation.read_checkpoint(str(tmp_path / "v6.ckpt"), 1)
+    assert np.array_equal(raw.element_parents(), np.arange(sim.n_elements))
+    back = fdem.Simulation.from_checkpoint(tmp_path / "v6.ckpt", model, threads=1)
+    assert np.array_equal(back.element_origins(), origins)
+    assert back.deactivate("weak") == len(sim.elements("weak"))
