@@ -2,7 +2,7 @@
 //! checksummed file, written atomically (docs/checkpoints.md).
 //!
 //! A checkpoint holds everything a step reads: nodes, elements and their
-//! plastic state, the current topology and its adjacency, surfaces, contact
+//! plastic state and lineage, the current topology and its adjacency, surfaces, contact
 //! history and the broad phase's candidate list and build positions, bonds,
 //! the fracture check's memory, loads, supports, the excavation schedule and
 //! its position, the time-step history (`Δt^{n−½}`, `Δt^{n+½}`, the critical
