@@ -7,6 +7,8 @@ renumbering and checkpoints. Tolerances beside each check."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import fdem
 import numpy as np
 import pytest
@@ -185,7 +187,7 @@ def without_lineage(path, out, parents: np.ndarray) -> None:
     import struct
     import zlib
 
-    b = open(path, "rb").read()
+    b = Path(path).read_bytes()
     assert b[:8] == b"FDEMCKPT" and struct.unpack_from("<I", b, 8)[0] == 7
     s_len, u_len = struct.unpack_from("<QQ", b, 16)
     varint = lambda n: max(1, -(-int(n).bit_length() // 7))  # noqa: E731
@@ -196,7 +198,7 @@ def without_lineage(path, out, parents: np.ndarray) -> None:
     struct.pack_into("<Q", head, 16, len(state))
     struct.pack_into("<I", head, 32, zlib.crc32(state + user))
     struct.pack_into("<I", head, 36, zlib.crc32(bytes(head[:36])))
-    open(out, "wb").write(bytes(head) + state + user)
+    Path(out).write_bytes(bytes(head) + state + user)
     assert u_len == len(user)
 
 
