@@ -334,7 +334,8 @@ class Model:
     def excavate(self, where: str | Any, *, at: float) -> Model:
         """Schedules an excavation stage (DESIGN §4.6): the elements of
         ``where`` (an element-set name or element ids) are removed once the
-        simulated time reaches ``at`` (s). Their mass and forces leave their
+        simulated time reaches ``at`` (s), with every piece crack insertion
+        has cut from them by then. Their mass and forces leave their
         nodes; nodes left without elements leave the model; the energy they
         take away is booked as ``excavated``. Stages run in time order."""
         t = number("at", at)

@@ -363,15 +363,49 @@ class Simulation:
         self._core.renumber()
         return self
 
-    def deactivate(self, where: str | Any) -> int:
-        """Removes elements now (an element-set name of the model's mesh or
-        element ids), as an excavation stage would; returns how many were
-        removed (already removed ones are skipped)."""
+    def deactivate(self, where: str | Any, *, descendants: bool = True) -> int:
+        """Removes elements now, as an excavation stage would; returns how
+        many were removed (already removed ones are skipped).
+
+        ``where`` is an element-set name of the model's mesh or element ids.
+        An id names the rock that element was when it was made: with
+        ``descendants`` (the default, and what excavation stages do) every
+        piece crack insertion has cut from it since goes with it, so a set
+        name or the model's element ids remove the set as it is now, pieces
+        included (:meth:`elements` lists them). ``descendants=False``
+        removes exactly the elements named, by their current ids (e.g. one
+        fragment's elements), and leaves pieces cut from them elsewhere.
+        """
         if isinstance(where, str):
             ids = self.model.mesh.elements(where)
         else:
             ids = index_array("elements", where, (None,))  # the kernel names a missing one
-        return int(self._core.deactivate(np.ascontiguousarray(ids, dtype=np.int64)))
+        return int(self._core.deactivate(np.ascontiguousarray(ids, dtype=np.int64), bool(descendants)))
+
+    def elements(self, where: str | Any) -> NDArray[np.int64]:
+        """The elements now (ids, ascending, removed ones included) of an
+        element set of the model's mesh or of the model's elements ``where``
+        (ids): those elements and every piece crack insertion has cut from
+        them. Pieces are in every set their model element is in, and have
+        its material (docs/fracture.md)."""
+        ids = self.model.mesh.elements(where) if isinstance(where, str) else index_array("elements", where, (None,))
+        ids = np.asarray(ids, dtype=np.int64)
+        m = self.model.mesh.n_elements
+        if ids.size and int(ids.max()) >= m:
+            raise ValueError(f"elements: id {int(ids.max())} is not an element of the model (it has {m})")
+        return np.flatnonzero(np.isin(self._core.element_origins(), ids))
+
+    def element_origins(self) -> NDArray[np.int64]:
+        """Each element's origin: the element of the model (id) it descends
+        from through crack insertion; itself for an element of the model.
+        An element is in every element set its origin is in."""
+        return self._core.element_origins()
+
+    def element_parents(self) -> NDArray[np.int64]:
+        """Each element's parent: the element (id) crack insertion cut it
+        from, itself for an element of the model (a parent's id is below
+        its piece's)."""
+        return self._core.element_parents()
 
     @property
     def stages_done(self) -> int:
@@ -567,6 +601,12 @@ class Simulation:
                 f"this model {mine[:12]}…); rebuild the model exactly as the run that wrote it",
                 source,
             )
+        # a checkpoint older than format 7 kept no lineage: its pieces are
+        # placed inside the model's elements (nothing to do otherwise)
+        core.recover_lineage(
+            np.ascontiguousarray(model.mesh.points, dtype=np.float64),
+            np.ascontiguousarray(model.mesh.triangles, dtype=np.int64),
+        )
         self = cls.__new__(cls)
         self.model = model
         # older checkpoints' run descriptions predate mass scaling and

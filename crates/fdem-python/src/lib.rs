@@ -536,8 +536,10 @@ impl PySimulation {
         })
     }
 
-    /// Removes elements now (excavation); returns how many were removed.
-    fn deactivate(&mut self, elements: PyReadonlyArray1<'_, i64>) -> PyResult<usize> {
+    /// Removes elements now (excavation), with `descendants` also every
+    /// piece cracks have cut from them; returns how many were removed.
+    #[pyo3(signature = (elements, descendants=true))]
+    fn deactivate(&mut self, elements: PyReadonlyArray1<'_, i64>, descendants: bool) -> PyResult<usize> {
         guard(|| {
             self.ok()?;
             let ids: Vec<u32> = elements
@@ -546,7 +548,44 @@ impl PySimulation {
                 .enumerate()
                 .map(|(i, &e)| to_u32("elements", i, e))
                 .collect::<PyResult<_>>()?;
-            self.sim.deactivate(&ids).map_err(|e| value_error(e.to_string()))
+            self.sim.deactivate(&ids, descendants).map_err(|e| value_error(e.to_string()))
+        })
+    }
+
+    /// Every element's parent: the element (id) crack insertion cut it
+    /// from, itself for an element of the model.
+    fn element_parents<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        self.sim.element_parents().iter().map(|&p| i64::from(p)).collect::<Vec<_>>().into_pyarray(py)
+    }
+
+    /// Every element's origin: the element of the model it descends from.
+    fn element_origins<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        self.sim.element_origins().into_iter().map(i64::from).collect::<Vec<_>>().into_pyarray(py)
+    }
+
+    /// Places the pieces of a run restored from a checkpoint without
+    /// lineage (format < 7) inside the model's elements (`points`,
+    /// `triangles`: the model's mesh); returns how many it placed.
+    fn recover_lineage(
+        &mut self,
+        points: PyReadonlyArray2<'_, f64>,
+        triangles: PyReadonlyArray2<'_, i64>,
+    ) -> PyResult<usize> {
+        guard(|| {
+            self.ok()?;
+            let points = rows::<2>("points", &points)?;
+            let triangles: Vec<[u32; 3]> = int_rows::<3>("triangles", &triangles)?
+                .into_iter()
+                .enumerate()
+                .map(|(e, t)| {
+                    let mut out = [0u32; 3];
+                    for k in 0..3 {
+                        out[k] = to_u32("triangles", 3 * e + k, t[k])?;
+                    }
+                    Ok(out)
+                })
+                .collect::<PyResult<_>>()?;
+            self.sim.recover_lineage(&points, &triangles).map_err(|e| value_error(e.to_string()))
         })
     }
 

@@ -2,7 +2,7 @@
 //! checksummed file, written atomically (docs/checkpoints.md).
 //!
 //! A checkpoint holds everything a step reads: nodes, elements and their
-//! plastic state, the current topology and its adjacency, surfaces, contact
+//! plastic state and lineage, the current topology and its adjacency, surfaces, contact
 //! history and the broad phase's candidate list and build positions, bonds,
 //! the fracture check's memory, loads, supports, the excavation schedule and
 //! its position, the time-step history (`Δt^{n−½}`, `Δt^{n+½}`, the critical
@@ -58,8 +58,9 @@ pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
 /// 1–4 kept its angle (rad): an older file's angles are converted as it is
 /// read, so its run continues with that direction (not bit for bit the run
 /// an older build would continue: its arithmetic differs in the last bits).
-/// Format 6 appends [`Format6`] (the contact dashpots of the node pass).
-pub const FORMAT_VERSION: u32 = 6;
+/// Format 6 appends [`Format6`] (the contact dashpots of the node pass),
+/// format 7 then [`Format7`] (the elements' lineage).
+pub const FORMAT_VERSION: u32 = 7;
 const HEADER: usize = 40;
 
 /// Why a checkpoint could not be written or read.
@@ -299,6 +300,28 @@ impl Format6 {
     }
 }
 
+/// What format 7 added, written after [`Format6`]: every element's parent
+/// (`lineage.rs`), per internal index. A file of an older format restores
+/// with every element its own parent, so a piece that cracks made before
+/// the file was written is in no element set until
+/// [`Simulation::recover_lineage`] places it inside its model element
+/// (`fdem.Simulation.from_checkpoint` does, with the model it is given).
+#[derive(Serialize, Deserialize)]
+struct Format7 {
+    parent: Vec<u32>,
+}
+
+impl Format7 {
+    fn of(s: &Simulation) -> Self {
+        Format7 { parent: s.elems.parent.clone() }
+    }
+
+    /// Every element its own parent: what an older file restores with.
+    fn none(m: usize, layout: &Layout) -> Self {
+        Format7 { parent: (0..m as u32).map(|e| layout.elem_id(e)).collect() }
+    }
+}
+
 fn le_u32(b: &[u8]) -> u32 {
     u32::from_le_bytes([b[0], b[1], b[2], b[3]])
 }
@@ -320,6 +343,7 @@ impl Simulation {
         state.extend(postcard::to_stdvec(&Format3::of(self)).expect("format-3 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format4::of(self)).expect("format-4 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format6::of(self)).expect("format-6 data is serialisable"));
+        state.extend(postcard::to_stdvec(&Format7::of(self)).expect("format-7 data is serialisable"));
         let mut out = Vec::with_capacity(HEADER + state.len() + user.len());
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -398,6 +422,12 @@ impl Simulation {
         } else {
             (None, rest)
         };
+        let (lineage, rest) = if version >= 7 {
+            let (l, rest) = postcard::take_from_bytes::<Format7>(rest).map_err(decode)?;
+            (Some(l), rest)
+        } else {
+            (None, rest)
+        };
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
         }
@@ -414,6 +444,15 @@ impl Simulation {
         if !renumbering.layout.is_consistent(owned.nodes.x.len(), owned.elems.conn.len()) {
             return Err(CheckpointError::Invalid("the node and element numbering is not a permutation".into()));
         }
+        let m = owned.elems.conn.len();
+        let lineage = lineage.unwrap_or_else(|| Format7::none(m, &renumbering.layout));
+        // a parent is an element made before its piece (or the element
+        // itself): a smaller or equal id
+        let layout = &renumbering.layout;
+        if lineage.parent.len() != m || (0..m as u32).any(|e| lineage.parent[e as usize] > layout.elem_id(e)) {
+            return Err(CheckpointError::Invalid("the element lineage is inconsistent".into()));
+        }
+        owned.elems.parent = lineage.parent;
         if let Some(f) = renumbering.renumber {
             if !(f > 0.0 && f.is_finite()) {
                 return Err(CheckpointError::Invalid(format!("renumbering fraction {f} must be positive")));

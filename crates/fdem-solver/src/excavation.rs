@@ -1,7 +1,8 @@
 //! Staged excavation, the clock reset after an equilibrium stage, and
 //! fragments (DESIGN §4.6, issue 6).
 //!
-//! Removing elements takes their mass and forces off their nodes; a node
+//! Removing elements takes their mass and forces off their nodes (with
+//! the pieces crack insertion has cut from them: `lineage.rs`); a node
 //! left without elements leaves the model (zero mass: the node pass skips
 //! it, it is on no surface, its bonds go). What the removal takes away, the
 //! elements' elastic energy, the kinetic energy of the mass that left and
@@ -14,19 +15,25 @@ use crate::{Energies, ExcavationStage};
 
 impl Simulation {
     /// Removes `elements` from the model now (ids; ones already removed are
-    /// skipped) and returns how many were removed. Errors name the first id
-    /// out of range; nothing is changed then.
-    pub fn deactivate(&mut self, elements: &[u32]) -> Result<usize, SetupError> {
+    /// skipped) and returns how many were removed. With `descendants`, also
+    /// every piece crack insertion has cut from them (`lineage.rs`): an id
+    /// then names the rock that element was when it was made, as the
+    /// model's element sets and excavation stages mean it. Without, exactly
+    /// the elements named. Errors name the first id out of range; nothing
+    /// is changed then.
+    pub fn deactivate(&mut self, elements: &[u32], descendants: bool) -> Result<usize, SetupError> {
         let m = self.elems.conn.len();
         if let Some(&e) = elements.iter().find(|&&e| e as usize >= m) {
             return Err(SetupError::Invalid(format!("element {e} does not exist (the model has {m})")));
         }
         let remove: Vec<usize> = {
-            let mut r: Vec<usize> = elements
-                .iter()
-                .map(|&e| self.layout.elem_index(e) as usize)
-                .filter(|&e| self.elems.active[e])
-                .collect();
+            let mut r: Vec<usize> = if descendants {
+                let marked = self.descendants(elements);
+                (0..m as u32).filter(|&id| marked[id as usize]).map(|id| self.layout.elem_index(id) as usize).collect()
+            } else {
+                elements.iter().map(|&e| self.layout.elem_index(e) as usize).collect()
+            };
+            r.retain(|&e| self.elems.active[e]);
             r.sort_unstable();
             r.dedup();
             r
@@ -87,8 +94,9 @@ impl Simulation {
         let mut ran = false;
         while self.next_stage < self.stages.len() && self.stages[self.next_stage].time <= self.time {
             let stage = std::mem::take(&mut self.stages[self.next_stage].elements);
-            // ids were checked at set-up
-            let _ = self.deactivate(&stage);
+            // ids were checked at set-up; a stage removes the pieces
+            // cracks have cut from its elements too
+            let _ = self.deactivate(&stage, true);
             self.stages[self.next_stage].elements = stage;
             self.next_stage += 1;
             ran = true;

@@ -453,7 +453,8 @@ impl Simulation {
     /// Carries the state through the edits: new nodes (copies keep position,
     /// velocity and supports; edge nodes are interpolated linearly, which
     /// keeps mass and linear momentum exactly), split elements (children
-    /// inherit stress and material state), crack faces (crack law), split
+    /// inherit material, stress, material state, mass scaling and, as their
+    /// parent, the parent's membership of element sets), crack faces (crack law), split
     /// facets (their law and loads), then rebuilds the topology.
     pub(crate) fn apply_edits(&mut self, edits: &Edits) {
         let kinetic = |s: &Self| -> f64 {
@@ -525,6 +526,8 @@ impl Simulation {
             self.elems.mass_scale.push(self.elems.mass_scale[p]);
             self.elems.state.push(self.elems.state[p]);
             self.elems.reference.push(self.elems.reference[p]);
+            // the piece is in every set its parent is in (by its id)
+            self.elems.parent.push(self.layout.elem_id(parent));
         }
         let m0 = self.elems.reference.len() - edits.added.len();
         // split elements and their pieces: the parent's reference shape, for

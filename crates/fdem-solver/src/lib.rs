@@ -23,6 +23,7 @@ mod energy;
 mod error;
 mod excavation;
 mod fracture;
+mod lineage;
 mod loads;
 pub mod material_point;
 mod model;

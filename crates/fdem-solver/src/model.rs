@@ -138,7 +138,8 @@ pub struct ModelSpec {
 pub struct ExcavationStage {
     /// Simulated time (s) at which the stage is excavated.
     pub time: f64,
-    /// The elements removed (ids; already removed ones are skipped).
+    /// The elements removed (ids; already removed ones are skipped), with
+    /// every piece crack insertion has cut from them.
     pub elements: Vec<u32>,
 }
 

@@ -298,6 +298,7 @@ impl Simulation {
         permute(&mut elems.stress, &elem_order);
         permute(&mut elems.mass_scale, &elem_order);
         permute(&mut elems.state, &elem_order);
+        permute(&mut elems.parent, &elem_order);
         permute(&mut self.omega, &elem_order);
         elems.force = elem_order.iter().flat_map(|&o| [0, 1, 2].map(|k| elems.force[3 * o as usize + k])).collect();
         if let Some(fr) = &mut self.fracture {

@@ -251,6 +251,7 @@ impl Simulation {
                 stress,
                 mass_scale: vec![1.0; m],
                 state: vec![PlasticState::default(); m],
+                parent: (0..m as u32).collect(),
                 force: vec![[0.0; 2]; 3 * m],
             },
             materials,

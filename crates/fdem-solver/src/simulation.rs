@@ -48,6 +48,12 @@ pub(crate) struct Elements {
     pub mass_scale: Vec<f64>,
     /// Plastic state (unused for elastic materials).
     pub state: Vec<PlasticState>,
+    /// The element (id) each element was cut from by crack insertion; an
+    /// element of the model is its own parent. Ids, not internal indices,
+    /// and a parent's id is below its child's (`lineage.rs`). Written after
+    /// the format-6 state in checkpoints (checkpoint.rs).
+    #[serde(skip)]
+    pub parent: Vec<u32>,
     /// Internal nodal forces at `xⁿ`, three per element (N).
     pub force: Vec<Vec2>,
 }

@@ -153,6 +153,12 @@ fn format6_len(nb: usize) -> usize {
     2 * (varint(nb) + 32 * nb)
 }
 
+/// Bytes of the format-7 block (lineage): a varint count and every
+/// element's parent as a varint.
+fn format7_len(sim: &Simulation) -> usize {
+    varint(sim.n_elements()) + sim.element_parents().iter().map(|&p| varint(p as usize)).sum::<usize>()
+}
+
 /// The plate with contact on its own surface (a dashpot of damping ratio
 /// 0.1).
 fn plate_with_contact(n: usize) -> ModelSpec {
@@ -184,8 +190,8 @@ fn a_format_1_file_still_reads_with_physical_masses() {
     let v3 = a.checkpoint_bytes(b"meta");
     let m = a.triangles().len();
     // postcard: varint length + m f64, `None` (one byte), one f64; two
-    // zero lengths; the format-4 and format-6 blocks
-    let v1 = downgrade(&v3, 1, varint(m) + 8 * m + 1 + 8 + 2 + format4_len(m) + format6_len(0));
+    // zero lengths; the format-4, format-6 and format-7 blocks
+    let v1 = downgrade(&v3, 1, varint(m) + 8 * m + 1 + 8 + 2 + format4_len(m) + format6_len(0) + format7_len(&a));
     let (mut b, user) = Simulation::from_checkpoint_bytes(&v1, 1).unwrap();
     assert_eq!(user, b"meta");
     assert!(b.mass_scale().iter().all(|&s| s == 1.0) && b.mass_scale().len() == m);
@@ -205,8 +211,9 @@ fn a_format_2_file_with_contact_reads_without_corner_contacts() {
     let nb = 4 * 6;
     // two lists of nb: an empty memory is 22 bytes (facet u32::MAX as a
     // 5-byte varint, two f64, `None`), an empty contact 70 (facet, 7 f64,
-    // a bool); then the format-4 and format-6 blocks
-    let v2 = downgrade(&v3, 2, 2 * varint(nb) + nb * (22 + 70) + format4_len(a.n_elements()) + format6_len(nb));
+    // a bool); then the format-4, format-6 and format-7 blocks
+    let blocks = format4_len(a.n_elements()) + format6_len(nb) + format7_len(&a);
+    let v2 = downgrade(&v3, 2, 2 * varint(nb) + nb * (22 + 70) + blocks);
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v2, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v3, "format 2 read back differs");
     a.step(20).unwrap();
@@ -243,7 +250,7 @@ fn a_format_4_file_keeps_its_crack_directions() {
     assert!(codes.iter().filter(|&&c| c != 0.0).count() >= cracked);
     // the same bytes marked as format 4: each code is read as an angle
     let v6 = a.checkpoint_bytes(b"");
-    let v4 = downgrade(&v6, 4, format6_len(0));
+    let v4 = downgrade(&v6, 4, format6_len(0) + format7_len(&a));
     let (b, _) = Simulation::from_checkpoint_bytes(&v4, 1).unwrap();
     let pi = std::f64::consts::PI;
     for (e, s) in b.plastic_states().iter().enumerate() {
@@ -262,7 +269,7 @@ fn a_format_5_file_reads_without_its_dashpots_and_a_format_6_file_with_them() {
     // tests/test_caving_resume.py).
     let mut a = Simulation::new(plate_with_contact(6), 1).unwrap();
     let v6 = a.checkpoint_bytes(b"");
-    let v5 = downgrade(&v6, 5, format6_len(4 * 6));
+    let v5 = downgrade(&v6, 5, format6_len(4 * 6) + format7_len(&a));
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v5, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v6, "format 5 read back differs");
     a.step(40).unwrap();
@@ -375,4 +382,34 @@ fn a_run_with_cohesive_bonds_restores_bit_for_bit_before_during_and_after_bond_f
         assert!(b.checkpoint_bytes(b"") == reference, "{label}: the restored run diverged");
         assert_eq!(a.energies(), b.energies(), "{label}");
     }
+}
+
+#[test]
+fn a_format_6_file_reads_without_lineage_and_a_bad_lineage_is_refused() {
+    // format 7 appends every element's parent (the element crack insertion
+    // cut it from). An uncracked model's elements are their own parents,
+    // which is what a format-6 file restores with: the same bytes back.
+    // (A cracked run's pieces are placed inside their model elements by
+    // `recover_lineage`: tests/test_excavation.py.)
+    let mut a = Simulation::new(plate(6), 1).unwrap();
+    a.step(10).unwrap();
+    let v7 = a.checkpoint_bytes(b"");
+    let m = a.n_elements();
+    assert!(a.element_parents().iter().enumerate().all(|(e, &p)| p as usize == e));
+    let v6 = downgrade(&v7, 6, format7_len(&a));
+    let (mut b, _) = Simulation::from_checkpoint_bytes(&v6, 1).unwrap();
+    assert!(b.checkpoint_bytes(b"") == v7, "format 6 read back differs");
+    // nothing to place: every element is one of the model's
+    assert_eq!(b.recover_lineage(&a.reference_positions(), &a.triangles()), Ok(0));
+    // the last element's parent made larger than its id (the last byte
+    // of the state, a one-byte varint here)
+    let s_len = u64::from_le_bytes(v7[16..24].try_into().unwrap()) as usize;
+    let mut bad = v7.clone();
+    assert_eq!(bad[40 + s_len - 1] as usize, m - 1);
+    bad[40 + s_len - 1] = m as u8;
+    let crc = crc32fast::hash(&bad[40..]);
+    bad[32..36].copy_from_slice(&crc.to_le_bytes());
+    reseal(&mut bad);
+    let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
+    assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("lineage")), "{e}");
 }
