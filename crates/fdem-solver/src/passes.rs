@@ -291,18 +291,16 @@ fn gather<T: Copy>(a: &[T], t: [u32; 3]) -> [T; 3] {
     [a[t[0] as usize], a[t[1] as usize], a[t[2] as usize]]
 }
 
-/// Whether the element with nodes `t` is a fragment of its own: two of its
-/// nodes (and so all three of its edges) belong to it alone, so that it is
-/// either a lone triangle or hangs from the rest by one node. Such an
-/// element is elastic (its plastic law is not applied): a crack through it
-/// can no longer be inserted as a split (it would leave pieces under the
-/// size limit, or simply detach it), so softening would only let its nodes
-/// drift apart as particles joined by nothing in tension (docs/fracture.md,
-/// "Fragments of one element").
+/// Whether the element with nodes `t` is a fragment of its own: a lone
+/// triangle, each of whose nodes belongs to it alone. Such an element is
+/// elastic (its plastic law is not applied): it cannot be split any more
+/// (a split would leave pieces under the size limit), so softening would
+/// only let its nodes drift apart as particles joined by nothing in
+/// tension (docs/fracture.md, "Fragments of one element").
 #[inline(always)]
 pub(crate) fn fragment(node_elems: &Csr, t: [u32; 3]) -> bool {
     let private = |v: u32| node_elems.offsets[v as usize + 1] - node_elems.offsets[v as usize] == 1;
-    u8::from(private(t[0])) + u8::from(private(t[1])) + u8::from(private(t[2])) >= 2
+    private(t[0]) && private(t[1]) && private(t[2])
 }
 
 /// Element pass: stress update to `σ̂^{n+1}` and internal forces at `x^{n+1}`.
