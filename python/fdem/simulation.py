@@ -37,7 +37,11 @@ class Simulation:
         Worker threads (default: all cores). Results are bit-for-bit the same
         for any count.
     safety : float
-        Safety factor ``s`` on the critical step ``min_e 2/ω_e`` (0 < s ≤ 1).
+        Safety factor ``s`` on the critical step (0 < s ≤ 1): the step is
+        ``s`` times the least of every element's ``2/ω_e`` and, with contact,
+        every boundary node's ``2/√(ω_e² + ω_c²)`` and ``1/ω_c`` (its penalty
+        springs' frequency ``ω_c``; the last keeps contact onsets from
+        changing the energy, docs/contact.md).
     dt : float, optional
         A fixed time step (s) instead of the automatic one.
     mass_damping : float
