@@ -172,8 +172,8 @@ pub struct Simulation {
     /// Critical step before the safety factor (s).
     pub(crate) dt_critical: f64,
     pub(crate) energies: Energies,
-    /// Held energy (kinetic + elastic) at the last energy-growth check, for
-    /// the watchdog's report.
+    /// Held energy (kinetic + elastic) at the last energy-growth check: the
+    /// watchdog's growth test and report.
     pub(crate) held_seen: f64,
     pub(crate) node_partials: Vec<NodePartial>,
     pub(crate) elem_partials: Vec<ElementPartial>,
@@ -331,10 +331,10 @@ impl Simulation {
 
     /// Re-evaluates the stable step (DESIGN §4.2): `s · min` over the
     /// elements of `2/ω_e` and, with contact, over the boundary nodes of
-    /// `2/√(ω_e² + ω_c²)` with `ω_c² = 4 k ℓ / m` (a node's contact spring
-    /// is the stiffness k times its tributary length ℓ; two-pass contact
-    /// doubles it, a free partner node doubles the relative frequency²),
-    /// reduced for the contact dashpot; or the fixed step. With mass
+    /// `2/ω` with `ω` from [`contact_bound`] (`ω_c² = 4 k ℓ / m`: a node's
+    /// contact spring is the stiffness k times its tributary length ℓ;
+    /// two-pass contact doubles it, a free partner node doubles the relative
+    /// frequency²), and over the bonds; or the fixed step. With mass
     /// scaling on, first raises the masses that would need a shorter step
     /// than the target ([`Self::scale_masses`]).
     pub fn update_time_step(&mut self) {
