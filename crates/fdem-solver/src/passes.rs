@@ -291,6 +291,16 @@ fn gather<T: Copy>(a: &[T], t: [u32; 3]) -> [T; 3] {
     [a[t[0] as usize], a[t[1] as usize], a[t[2] as usize]]
 }
 
+/// Fracturing strain `κ` (−) at which a crack band has opened by its own
+/// width (`w = κ h_c`): from there the element is elastic. A crack open
+/// that wide should have been inserted; where the planner cannot cut the
+/// element (a crack plane through a node of a stretched triangle leaves it
+/// outside the node's angle, and clumps of softened debris near other
+/// cracks are left alone), the softened band let its nodes drift apart
+/// without bound: 79 elements of the paper-scale caving run stretched 5
+/// to 20 times by 3.5 s (docs/fracture.md, "Fragments of one element").
+pub(crate) const OPEN_BAND: f64 = 1.0;
+
 /// Whether the element with nodes `t` is a fragment of its own: a lone
 /// triangle, each of whose nodes belongs to it alone. Such an element is
 /// elastic (its plastic law is not applied): it cannot be split any more
@@ -352,7 +362,8 @@ pub(crate) fn element_pass(
                     let old = sc[j];
                     let mut new = mat.elastic.trial(old, dh, inp.dt);
                     let half_area = 0.5 * frames.twice_area_mid[l];
-                    if let (true, Some(law), false) = (inp.plastic, &mat.plastic, fragment(inp.node_elems, conn[l])) {
+                    let debris = stc[j].kappa >= OPEN_BAND || fragment(inp.node_elems, conn[l]);
+                    if let (true, Some(law), false) = (inp.plastic, &mat.plastic, debris) {
                         let u = law.update(old, new, &mut stc[j], || reference_geometry(&inp.reference[e]));
                         new = u.stress;
                         acc.plastic += half_area * u.plastic_dissipation;

@@ -209,12 +209,14 @@ fn a_triangle_of_its_own_holds_together_where_a_softened_one_would_drift_apart()
     assert_eq!(lone.failure_factors()[0], 0.0, "a fragment softened");
 
     // the same pull on a body of two elements, whose nodes each belong to
-    // both or to one: it softens (crack insertion is off here) and its
-    // elements drift apart with the nodes
+    // both or to one: it softens (crack insertion is off here) until its
+    // bands have opened by their own width (κ = 1, `passes::OPEN_BAND`),
+    // then holds: elastic from there, its elements ring about twice their
+    // size instead of drifting on to 15 times
     let mut body = expanding(vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], vec![[0, 1, 2], [0, 2, 3]]);
     let l0 = longest_edges(&body);
     body.step(2_000).unwrap();
     let l = longest_edges(&body);
     assert!(body.failure_factors().iter().all(|&f| f >= 1.0), "{:?}", body.failure_factors());
-    assert!(l.iter().zip(&l0).all(|(a, b)| a / b > 5.0), "{l:?} against {l0:?}");
+    assert!(l.iter().zip(&l0).all(|(a, b)| (1.5..3.0).contains(&(a / b))), "{l:?} against {l0:?}");
 }
