@@ -293,11 +293,9 @@ fn gather<T: Copy>(a: &[T], t: [u32; 3]) -> [T; 3] {
 
 /// Fracturing strain `κ` (−) at which a crack band has opened by its own
 /// width (`w = κ h_c`): from there the element is elastic. A crack open
-/// that wide should have been inserted; where the planner cannot cut the
-/// element (a crack plane through a node of a stretched triangle leaves it
-/// outside the node's angle, and clumps of softened debris near other
-/// cracks are left alone), the softened band let its nodes drift apart
-/// without bound: 79 elements of the paper-scale caving run stretched 5
+/// that wide should have been inserted; where the planner did not cut the
+/// element (stretched triangles in clumps of softened debris), the
+/// softened band let its nodes drift apart without bound: 79 elements of the paper-scale caving run stretched 5
 /// to 20 times by 3.5 s (docs/fracture.md, "Fragments of one element").
 pub(crate) const OPEN_BAND: f64 = 1.0;
 
