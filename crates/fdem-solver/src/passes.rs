@@ -295,8 +295,9 @@ fn gather<T: Copy>(a: &[T], t: [u32; 3]) -> [T; 3] {
 /// width (`w = κ h_c`): from there the element is elastic. A crack open
 /// that wide should have been inserted; where the planner did not cut the
 /// element (stretched triangles in clumps of softened debris), the
-/// softened band let its nodes drift apart without bound: 79 elements of the paper-scale caving run stretched 5
-/// to 20 times by 3.5 s (docs/fracture.md, "Fragments of one element").
+/// softened band let its nodes drift apart without bound: 79 elements of
+/// the paper-scale caving run stretched 5 to 20 times by 3.5 s
+/// (docs/fracture.md, "Fragments of one element").
 pub(crate) const OPEN_BAND: f64 = 1.0;
 
 /// Whether the element with nodes `t` is a fragment of its own: a lone
