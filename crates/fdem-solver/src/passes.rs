@@ -276,9 +276,13 @@ pub(crate) struct ElementInputs<'a> {
     pub material: &'a [u32],
     pub active: &'a [bool],
     pub materials: &'a [Material],
-    /// Active elements per node: an element that holds two of its nodes
-    /// alone is a fragment ([`fragment`]).
+    /// Active elements per node: an element that holds its nodes alone is
+    /// a fragment ([`fragment`]).
     pub node_elems: &'a Csr,
+    /// Whether crack insertion is on: only then are fragments and bands
+    /// opened by their own width elastic (a crack the planner could have
+    /// cut); without it the softened band is the crack.
+    pub insertion: bool,
     pub beta: f64,
     /// The step just taken, `Δt^{n+½}` (s); zero to only recompute forces.
     pub dt: f64,
@@ -292,7 +296,8 @@ fn gather<T: Copy>(a: &[T], t: [u32; 3]) -> [T; 3] {
 }
 
 /// Fracturing strain `κ` (−) at which a crack band has opened by its own
-/// width (`w = κ h_c`): from there the element is elastic. A crack open
+/// width (`w = κ h_c`): from there the element is elastic, when crack
+/// insertion is on. A crack open
 /// that wide should have been inserted; where the planner did not cut the
 /// element (stretched triangles in clumps of softened debris), the
 /// softened band let its nodes drift apart without bound: 79 elements of
@@ -301,8 +306,9 @@ fn gather<T: Copy>(a: &[T], t: [u32; 3]) -> [T; 3] {
 pub(crate) const OPEN_BAND: f64 = 1.0;
 
 /// Whether the element with nodes `t` is a fragment of its own: a lone
-/// triangle, each of whose nodes belongs to it alone. Such an element is
-/// elastic (its plastic law is not applied): it cannot be split any more
+/// triangle, each of whose nodes belongs to it alone. With crack
+/// insertion on, such an element is elastic (its plastic law is not
+/// applied): it cannot be split any more
 /// (a split would leave pieces under the size limit), so softening would
 /// only let its nodes drift apart as particles joined by nothing in
 /// tension (docs/fracture.md, "Fragments of one element").
@@ -361,7 +367,7 @@ pub(crate) fn element_pass(
                     let old = sc[j];
                     let mut new = mat.elastic.trial(old, dh, inp.dt);
                     let half_area = 0.5 * frames.twice_area_mid[l];
-                    let debris = stc[j].kappa >= OPEN_BAND || fragment(inp.node_elems, conn[l]);
+                    let debris = inp.insertion && (stc[j].kappa >= OPEN_BAND || fragment(inp.node_elems, conn[l]));
                     if let (true, Some(law), false) = (inp.plastic, &mat.plastic, debris) {
                         let u = law.update(old, new, &mut stc[j], || reference_geometry(&inp.reference[e]));
                         new = u.stress;
