@@ -39,9 +39,10 @@ class Simulation:
     safety : float
         Safety factor ``s`` on the critical step (0 < s ≤ 1): the step is
         ``s`` times the least of every element's ``2/ω_e`` and, with contact,
-        every boundary node's ``2/√(ω_e² + ω_c²)`` and ``1/ω_c`` (its penalty
-        springs' frequency ``ω_c``; the last keeps contact onsets from
-        changing the energy, docs/contact.md).
+        every boundary node's ``2/√(ω_e² + ω_c²)`` (``ω_c`` its penalty
+        springs' frequency) and, when some interface law has a damping
+        ratio below 0.1, ``1/ω_c``, which keeps the onsets of an undamped,
+        rattling contact from changing the energy (docs/contact.md).
     dt : float, optional
         A fixed time step (s) instead of the automatic one.
     mass_damping : float
