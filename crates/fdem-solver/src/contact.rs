@@ -12,7 +12,6 @@ use crate::error::SetupError;
 use crate::model::ContactSpec;
 use crate::NONE;
 
-
 /// Damping ratio of an interface's dashpot from which a penalty contact
 /// no longer rattles at the stability bound. Two bars meeting at 1 m/s
 /// with a node spring of 20 E or 100 E, at twice the default step
