@@ -367,8 +367,14 @@ pub(crate) fn element_pass(
                     let old = sc[j];
                     let mut new = mat.elastic.trial(old, dh, inp.dt);
                     let half_area = 0.5 * frames.twice_area_mid[l];
-                    let debris = inp.insertion && (stc[j].kappa >= OPEN_BAND || fragment(inp.node_elems, conn[l]));
-                    if let (true, Some(law), false) = (inp.plastic, &mat.plastic, debris) {
+                    // debris (with crack insertion on) is elastic; tested
+                    // only for plastic laws, so that elastic materials and
+                    // the equilibrium stage read no connectivity
+                    let plastic = mat.plastic.as_ref().filter(|_| {
+                        inp.plastic
+                            && !(inp.insertion && (stc[j].kappa >= OPEN_BAND || fragment(inp.node_elems, conn[l])))
+                    });
+                    if let Some(law) = plastic {
                         let u = law.update(old, new, &mut stc[j], || reference_geometry(&inp.reference[e]));
                         new = u.stress;
                         acc.plastic += half_area * u.plastic_dissipation;

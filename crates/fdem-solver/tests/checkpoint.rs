@@ -2,10 +2,10 @@
 //! refused with the reason (docs/checkpoints.md).
 
 mod common;
-use common::square;
+use common::{one_law_contact, square};
 use fdem_solver::{
-    CheckpointError, Constraint, ContactSpec, CrackBand, FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec,
-    Simulation, CHECKPOINT_FORMAT,
+    CheckpointError, Constraint, CrackBand, FractureSpec, LawSpec, MaterialSpec, ModelSpec, Simulation,
+    CHECKPOINT_FORMAT,
 };
 
 /// A damped, gravity-loaded plate of `n × n` cells, supported at the bottom,
@@ -163,18 +163,7 @@ fn format7_len(sim: &Simulation) -> usize {
 /// 0.1).
 fn plate_with_contact(n: usize) -> ModelSpec {
     let mut spec = plate(n);
-    spec.contact = Some(ContactSpec {
-        laws: vec![InterfaceSpec {
-            normal_stiffness: 1e10,
-            shear_stiffness: 1e10,
-            friction: 0.5,
-            cohesion: 0.0,
-            damping_ratio: 0.1,
-        }],
-        facet_laws: Vec::new(),
-        crack_law: 0,
-        margin: None,
-    });
+    spec.contact = Some(one_law_contact(1e10, 0.5, 0.1));
     spec
 }
 
@@ -324,18 +313,7 @@ fn bonded_bar() -> ModelSpec {
         materials: vec![rock(1.0e6), rock(0.8e6)],
         element_material,
         constraints,
-        contact: Some(ContactSpec {
-            laws: vec![InterfaceSpec {
-                normal_stiffness: 1e11,
-                shear_stiffness: 1e11,
-                friction: 30f64.to_radians().tan(),
-                cohesion: 0.0,
-                damping_ratio: 0.5,
-            }],
-            facet_laws: Vec::new(),
-            crack_law: 0,
-            margin: None,
-        }),
+        contact: Some(one_law_contact(1e11, 30f64.to_radians().tan(), 0.5)),
         fracture: Some(FractureSpec { params: Default::default(), interval: 5, insert_at: 0.02 }),
         ..Default::default()
     };

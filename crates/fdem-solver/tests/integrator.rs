@@ -1,12 +1,9 @@
 //! Integration tests of the time loop on tiny meshes with closed-form answers.
 
-use fdem_solver::{
-    Constraint, ContactSpec, FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, PressureLoad, Settings,
-    Simulation,
-};
+use fdem_solver::{Constraint, FractureSpec, LawSpec, MaterialSpec, ModelSpec, PressureLoad, Settings, Simulation};
 
 mod common;
-use common::square;
+use common::{one_law_contact, square};
 
 fn spec(n: usize) -> ModelSpec {
     let (points, triangles) = square(n, 1.0);
@@ -173,18 +170,7 @@ fn expanding(points: Vec<[f64; 2]>, triangles: Vec<[u64; 3]>, check_every: Optio
         }],
         element_material: vec![0; m],
         initial_velocity: Some(v),
-        contact: check_every.map(|_| ContactSpec {
-            laws: vec![InterfaceSpec {
-                normal_stiffness: 1e10,
-                shear_stiffness: 1e10,
-                friction: 0.5,
-                cohesion: 0.0,
-                damping_ratio: 0.5,
-            }],
-            facet_laws: Vec::new(),
-            crack_law: 0,
-            margin: None,
-        }),
+        contact: check_every.map(|_| one_law_contact(1e10, 0.5, 0.5)),
         fracture: check_every.map(|interval| FractureSpec { params: Default::default(), interval, insert_at: 1.0 }),
         ..Default::default()
     };

@@ -1,4 +1,6 @@
-//! Meshes shared by the solver's integration tests.
+//! Meshes and specs shared by the solver's integration tests.
+
+use fdem_solver::{ContactSpec, InterfaceSpec};
 
 /// A unit square of `n × n` cells split into right triangles.
 pub fn square(n: usize, size: f64) -> (Vec<[f64; 2]>, Vec<[u64; 3]>) {
@@ -18,4 +20,22 @@ pub fn square(n: usize, size: f64) -> (Vec<[f64; 2]>, Vec<[u64; 3]>) {
         }
     }
     (p, t)
+}
+
+/// Contact with one interface law for every facet and crack: normal and
+/// shear stiffness `stiffness` (Pa/m), friction coefficient `friction`, no
+/// cohesion, dashpot damping ratio `damping`.
+pub fn one_law_contact(stiffness: f64, friction: f64, damping: f64) -> ContactSpec {
+    ContactSpec {
+        laws: vec![InterfaceSpec {
+            normal_stiffness: stiffness,
+            shear_stiffness: stiffness,
+            friction,
+            cohesion: 0.0,
+            damping_ratio: damping,
+        }],
+        facet_laws: Vec::new(),
+        crack_law: 0,
+        margin: None,
+    }
 }
