@@ -57,6 +57,12 @@ def main(argv: list[str] | None = None) -> dict:
         help="Delaunay refinement from the joint traces instead of the uniform mesh (docs/meshing.md): "
         "1.4x the elements, 0.65x the intact step",
     )
+    ap.add_argument(
+        "--probe-frame",
+        choices=("left", "centred"),
+        default=None,
+        help="where the paper's Table 2 x is measured from: the block's left side (default) or its midline",
+    )
     ap.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
     ap.add_argument("--quiet", action="store_true", help="no progress display")
     ap.add_argument(
@@ -77,6 +83,8 @@ def main(argv: list[str] | None = None) -> dict:
     if args.mass_scaling is not None:
         off = args.mass_scaling.lower() in ("off", "none")
         case = replace(case, mass_scaling=None if off else float(args.mass_scaling))
+    if args.probe_frame is not None:
+        case = replace(case, probe_frame=args.probe_frame)
     out = args.out or ("caving_output_quick" if args.quick else "caving_output")
     try:
         return run_caving(out, case, threads=args.threads, progress=not args.quiet, resume=args.resume)

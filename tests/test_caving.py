@@ -304,3 +304,80 @@ def test_strip_means_integrate_over_the_strips_exactly():
     np.testing.assert_allclose(means, 1.5 * (edges[1:] + edges[:-1]), atol=3.0 * 0.7)
     # and a constant field is read exactly
     np.testing.assert_allclose(strip_means(corners, np.full(len(y), -2.0), edges)[0], -2.0, rtol=1e-12)
+
+
+def test_table2_points_sit_where_the_frame_puts_them(quick_caving):
+    """Issue 37 (3): the paper's x read from the block's left side (the
+    default) puts its points at model x = x − 100 m, the centred reading at
+    x; y is the model's own. The run's probe table holds those positions,
+    the mirror points, and the paper's points at x = 16 m in the left
+    abutment, 4 m outside the undercut's edge."""
+    from fdem.caving_stress import PAPER_TABLE2, probe_points
+
+    xy = np.array([[x, y] for _, x, y, *_ in PAPER_TABLE2])
+    assert np.array_equal(probe_points("left", 200.0), xy - [100.0, 0.0])
+    assert np.array_equal(probe_points("centred", 200.0), xy)
+    assert CavingCase().probe_frame == "left"
+    with pytest.raises(ValueError, match="probe_frame"):
+        CavingCase(probe_frame="middle")
+    abutment = probe_points("left", 200.0)[[5, 6]]
+    assert np.allclose(abutment[:, 0], -0.5 * CavingCase().undercut - 4.0)
+    out, _ = quick_caving
+    with open(out / "probes.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    for name, x, y, *_ in PAPER_TABLE2:
+        mine = [r for r in rows if r["node"] == str(float(name))]
+        assert {(float(r["x_m"]), float(r["y_m"])) for r in mine} == {(x - 100.0, y)}
+        assert {(float(r["x_paper_m"]), float(r["y_paper_m"])) for r in mine} == {(x, y)}
+    table = (out / "table2.csv").read_text().splitlines()
+    assert table[0].startswith("# time_s") and "left" in table[0] and len(table) == 2 + 9
+    assert (out / "table2.png").stat().st_size > 10_000 and (out / "abutment.png").stat().st_size > 10_000
+
+
+def test_probes_and_profiles_read_a_known_stress_field():
+    """The readers on a constructed state: the geostatic start of the quick
+    case, σyy = −(p + γ (top − y)) element by element. A probe returns the
+    stress of the element holding the point (NaN outside the rock); the
+    line profile, an area mean over boxes of elements, is within γ h of the
+    line's value (h the box's half height, the most an element's centroid
+    can lie off the line); the abutment factor is then 1 within the same."""
+    from fdem.caving import TOP, TOP_PRESSURE, UNIT_WEIGHT
+    from fdem.caving_stress import ABUTMENT_LINE, abutment_peaks, probe_stress, stress_profile
+
+    case = CavingCase.quick()
+    sim = fdem.Simulation(caving_model(case), threads=1)
+    cen = sim.positions()[sim.triangles()].mean(axis=1)
+    pts = cen[[10, 500, 2000]]
+    got = probe_stress(sim, np.vstack([pts, [[0.0, TOP + 10.0]]]))
+    assert np.array_equal(got[:3], sim.stress()[[10, 500, 2000]])
+    assert np.isnan(got[3]).all()
+    edges = np.arange(-100.0, 100.0 + 1e-9, case.size)
+    prof = stress_profile(sim, ABUTMENT_LINE, edges, case.size)
+    lith = -(TOP_PRESSURE + UNIT_WEIGHT * (TOP - ABUTMENT_LINE))
+    assert np.isfinite(prof).all()
+    assert np.max(np.abs(prof[:, 1] - lith)) <= UNIT_WEIGHT * case.size
+    peaks = abutment_peaks(sim, width=200.0, undercut=case.undercut, size=case.size, lithostatic=lith)
+    assert peaks["left_x"] < -80.0 < 80.0 < peaks["right_x"]
+    for side in ("left", "right"):
+        assert abs(peaks[f"{side}_factor"] - 1.0) <= UNIT_WEIGHT * case.size / abs(lith)
+
+
+def test_abutments_carry_the_undercut_load(quick_caving):
+    """Issue 37 (3): once the undercut is complete the rock beside each
+    edge carries what the undercut no longer does: the peak σyy along the
+    probes' depth beside each edge is above 1.5 times the lithostatic value
+    there (the paper's points at x = 16 m show 3.0 and 3.7). Before the
+    first stage it is the lithostatic value (within 10%: the peak of boxes
+    of 4 m elements)."""
+    out, summary = quick_caving
+    with open(out / "abutment.csv", newline="") as f:
+        next(f)
+        rows = list(csv.DictReader(f))
+    start = rows[0]
+    assert abs(float(start["left_factor"]) - 1) < 0.1 and abs(float(start["right_factor"]) - 1) < 0.1
+    stages = max(int(r["stages_done"]) for r in rows)
+    assert stages == round(CavingCase.quick().undercut / 20.0)
+    done = next(r for r in rows if int(r["stages_done"]) == stages)
+    assert float(done["left_factor"]) > 1.5 and float(done["right_factor"]) > 1.5
+    assert summary["abutment_factor_undercut_done_left"] == float(done["left_factor"])
+    assert summary["abutment_factor_undercut_done_right"] == float(done["right_factor"])

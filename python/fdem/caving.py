@@ -11,7 +11,14 @@ everything into one directory:
   and cracks drawn (the paper's Fig. 4), at several times;
 - ``fig5_caving_3.5s.png`` (or at the last time): the fractured, flowing rock
   (Fig. 5), coloured by speed;
-- ``probes.csv``: σxx, σyy, σzz, σxy at the paper's Table 2 points over time;
+- ``probes.csv``: σxx, σyy, σzz, σxy at the paper's Table 2 points over time,
+  in the frame ``CavingCase.probe_frame`` and at their mirror images;
+- ``table2.csv``, ``table2.md`` and ``table2.png``: the paper's Table 2
+  beside ours at the end (3.5 s), and ours over time
+  (:mod:`fdem.caving_stress`);
+- ``abutment.csv``, ``abutment_profile.csv`` and ``abutment.png``: the
+  vertical stress across the abutments at the probes' depth against the
+  lithostatic value, and its peak beside each undercut edge over time;
 - ``fragments.csv`` and ``fragments.png``: fragment sizes at the end;
 - ``caving_energy.csv`` and ``energy.png``: the energy account over time;
 - ``summary.txt``: what happened, in numbers.
@@ -36,22 +43,25 @@ from .joints import JointSet, jointed_rectangle
 from .materials import Elastic, MohrCoulombRankine
 from .model import Model
 from .plot import plot_field
+from .caving_stress import (
+    ABUTMENT_LINE,
+    FRAMES,
+    PAPER_TABLE2,
+    abutment_peaks,
+    plot_abutments,
+    plot_table2,
+    probe_points,
+    probe_stress,
+    stress_profile,
+    write_table2,
+)
 from .simulation import Simulation
 
 __all__ = ["CavingCase", "caving_model", "run_caving", "probe_stress", "PAPER_PROBES"]
 
-# Table 2 of the paper: node, x (m), y (m) at 3.5 s
-PAPER_PROBES: tuple[tuple[str, float, float], ...] = (
-    ("91693", 77.58, -533.76),
-    ("91953", 67.44, -529.09),
-    ("3320", 51.00, -520.00),
-    ("63098", 38.20, -520.40),
-    ("19556", 27.71, -514.65),
-    ("16475", 16.00, -507.00),
-    ("12485", 16.00, -495.00),
-    ("11496", 8.00, -481.00),
-    ("1911", 0.00, -478.00),
-)
+# Table 2 of the paper: node, x (m), y (m) at 3.5 s, in the paper's frame
+# (fdem.caving_stress has its stresses and the frames)
+PAPER_PROBES: tuple[tuple[str, float, float], ...] = tuple((n, x, y) for n, x, y, *_ in PAPER_TABLE2)
 
 WIDTH, HEIGHT = 200.0, 100.0
 BOTTOM = -534.0  # the paper's probe coordinates put the block between y = −534 and −434 m
@@ -129,7 +139,13 @@ class CavingCase:
     instead of 6 save a tenth of the run (the insertions' rebuilds), and
     cave within the spread of the numberings, but give 5% more fragments
     on average, beyond that spread (so do longer delays at 2 m). The
-    default stays at 6."""
+    default stays at 6.
+    ``probe_frame`` says where the paper's Table 2 points lie in the model
+    (:data:`fdem.caving_stress.FRAMES`): ``"left"``, x measured from the
+    block's left side, which puts the paper's points at x = 0–16 m in the
+    left abutment and those at x ≥ 38 m over the caved undercut, is the
+    reading the paper's own numbers support (docs/caving.md, "Table 2
+    side by side"); ``"centred"`` measures x from the midline."""
 
     size: float = 1.0
     joint_scale: float = 1.0
@@ -148,6 +164,11 @@ class CavingCase:
     uniform_mesh: bool = True
     check_every: int = 6
     safety: float = 0.9
+    probe_frame: str = "left"
+
+    def __post_init__(self) -> None:
+        if self.probe_frame not in FRAMES:
+            raise ValueError(f"CavingCase.probe_frame must be one of {FRAMES}, not {self.probe_frame!r}")
 
     @staticmethod
     def quick() -> CavingCase:
@@ -205,27 +226,6 @@ def caving_model(case: CavingCase | None = None) -> Model:
     for k in range(1, stages + 1):
         model.excavate(f"undercut_{k}", at=case.start + (k - 1) * case.interval)
     return model
-
-
-def probe_stress(sim: Simulation, points: Any) -> NDArray[np.float64]:
-    """Stress ``[xx, yy, zz, xy]`` (Pa) of the element containing each point
-    (current configuration); NaN where no element does (a void)."""
-    pts = np.atleast_2d(np.asarray(points, dtype=float))
-    x = sim.positions()
-    tri = sim.triangles()
-    keep = np.flatnonzero(sim.active())
-    p = x[tri[keep]]
-    s = sim.stress()
-    out = np.full((len(pts), 4), np.nan)
-    for i, q in enumerate(pts):
-        a, b, c = p[:, 0], p[:, 1], p[:, 2]
-        d = (b[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (a[:, 1] - c[:, 1])
-        l1 = ((b[:, 1] - c[:, 1]) * (q[0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (q[1] - c[:, 1])) / d
-        l2 = ((c[:, 1] - a[:, 1]) * (q[0] - c[:, 0]) + (a[:, 0] - c[:, 0]) * (q[1] - c[:, 1])) / d
-        inside = np.flatnonzero((l1 >= -1e-9) & (l2 >= -1e-9) & (1 - l1 - l2 >= -1e-9))
-        if len(inside):
-            out[i] = s[keep[inside[0]]]
-    return out
 
 
 def area_below(corners: NDArray[np.float64], height: float) -> NDArray[np.float64]:
@@ -369,7 +369,10 @@ def run_caving(
         sim, book = _started(model, case, threads, progress, wall0)
     n0 = int(book["elements_initial"])
     figure_times = case.figure_times()
-    points = np.array([[x, y] for _, x, y in PAPER_PROBES])
+    points = probe_points(case.probe_frame, WIDTH)
+    mirror = points * np.array([-1.0, 1.0])
+    lithostatic = -(TOP_PRESSURE + UNIT_WEIGHT * (TOP - ABUTMENT_LINE))
+    book.setdefault("abutment", [])
     sample = min(0.05, case.output_every)
     figures: list[str] = book["figures"]
     run0 = _time.perf_counter()
@@ -441,14 +444,20 @@ def run_caving(
                         limits=(-40.0, 2.0),
                     )
                     figures.append(path.name)
-            sig = probe_stress(sim, points)
+            sig = probe_stress(sim, points) / 1e6
+            # the mirror image's shear stress, read in the mirrored frame
+            sig_m = probe_stress(sim, mirror) * np.array([1.0, 1.0, 1.0, -1.0]) / 1e6
             rows = [
-                [sim.time, float(name), x, y, *(st / 1e6).tolist()]
-                for (name, x, y), st in zip(PAPER_PROBES, sig, strict=True)
+                [sim.time, float(name), xp, yp, *xy.tolist(), *st.tolist(), *sm.tolist()]
+                for (name, xp, yp), xy, st, sm in zip(PAPER_PROBES, points, sig, sig_m, strict=True)
             ]
             # rows of a sample cut short before it was counted are dropped
             # by ``_trim``
             book["probes"].extend(rows)
+            peaks = abutment_peaks(
+                sim, width=WIDTH, undercut=case.undercut, size=case.size, lithostatic=lithostatic
+            )
+            book["abutment"].append([sim.time, sim.stages_done, *peaks.values()])
             book["samples"] += 1
             book["sampled"] = t
             mark()
@@ -471,10 +480,7 @@ def run_caving(
     fig5 = out / f"fig5_caving_{sim.time:.1f}s.png"
     plot_field(sim, "velocity", fig5, title=f"Fractured, caving rock at t = {sim.time:.2f} s (speed)")
     figures.append(fig5.name)
-    with open(out / "probes.csv", "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["time_s", "node", "x_m", "y_m", "sxx_MPa", "syy_MPa", "szz_MPa", "sxy_MPa"])
-        w.writerows(probe_rows)
+    abutment = _write_stress_tables(out, sim, case, probe_rows, book["abutment"], points, lithostatic)
     frags = sim.fragments()
     with open(out / "fragments.csv", "w", newline="") as f:
         w = csv.writer(f)
@@ -514,6 +520,7 @@ def run_caving(
         "added_mass_fraction": sim.added_mass / (sim.masses().sum() - sim.added_mass),
         "energy_residual_J": e["residual"],
         "energy_supplied_J": supplied,
+        **abutment,
         **rest,
         # the contact's assembly runs beside the element pass on more than
         # one thread: their clocks overlap
@@ -586,7 +593,7 @@ def _started(
 
 #: What runs made before a field of :class:`CavingCase` existed did, where
 #: that differs from the field's default now.
-_BEFORE_FIELD = {"uniform_mesh": False}
+_BEFORE_FIELD = {"uniform_mesh": False, "probe_frame": "centred"}
 
 
 def _resumed(ckpt: Path, model: Model, case: CavingCase, threads: int | None) -> Simulation:
@@ -611,6 +618,9 @@ def _resumed(ckpt: Path, model: Model, case: CavingCase, threads: int | None) ->
     if differ:
         raise ValueError(f"{ckpt}: written for another case: " + ", ".join(differ) + "; only until may change")
     book["case"] = mine
+    # probe rows from before the mirror points and the model coordinates
+    # were kept (time, node, x, y and four stresses, centred frame)
+    book["probes"] = [r if len(r) == 14 else [*r[:4], *r[2:4], *r[4:8], *[float("nan")] * 4] for r in book["probes"]]
     _trim(book)
     return sim
 
@@ -619,3 +629,60 @@ def _trim(book: dict[str, Any]) -> None:
     """Drops probe rows of a sample that was interrupted before it was
     counted (it is taken again)."""
     del book["probes"][book["samples"] * len(PAPER_PROBES) :]
+    del book.setdefault("abutment", [])[book["samples"] :]
+
+
+def _write_stress_tables(
+    out: Path,
+    sim: Simulation,
+    case: CavingCase,
+    probe_rows: list[list[float]],
+    abutment_rows: list[list[float]],
+    points: NDArray[np.float64],
+    lithostatic: float,
+) -> dict[str, float]:
+    """Writes the probe table, Table 2 beside ours, and the abutment stress
+    (over time and along the line at the end) with their pictures; returns
+    the abutment concentration factors for the summary: at the end, and at
+    the first sample once the last undercut stage is done."""
+    with open(out / "probes.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        head = ["time_s", "node", "x_paper_m", "y_paper_m", "x_m", "y_m"]
+        head += [f"{k}_MPa" for k in ("sxx", "syy", "szz", "sxy")]
+        head += [f"{k}_mirror_MPa" for k in ("sxx", "syy", "szz", "sxy")]
+        w.writerow(head)
+        w.writerows(probe_rows)
+    write_table2(out, probe_rows, case.probe_frame, points)
+    plot_table2(out, probe_rows, case.probe_frame)
+    keys = ["left_syy_Pa", "left_x_m", "left_factor", "right_syy_Pa", "right_x_m", "right_factor"]
+    with open(out / "abutment.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["# y_m", ABUTMENT_LINE, "lithostatic_syy_Pa", lithostatic])
+        w.writerow(["time_s", "stages_done", *keys])
+        w.writerows(abutment_rows)
+    edges = np.arange(-0.5 * WIDTH, 0.5 * WIDTH + 0.5 * case.size, case.size)
+    x = 0.5 * (edges[1:] + edges[:-1])
+    profile = stress_profile(sim, ABUTMENT_LINE, edges, case.size)
+    with open(out / "abutment_profile.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["x_m", "sxx_Pa", "syy_Pa", "szz_Pa", "sxy_Pa", "lithostatic_syy_Pa"])
+        w.writerows([[xi, *p, lithostatic] for xi, p in zip(x, profile.tolist(), strict=True)])
+    near = [
+        (sign * xm, syy)
+        for (_, _, yp, _, syy, _, _), (xm, _) in zip(PAPER_TABLE2, points, strict=True)
+        if abs(yp - ABUTMENT_LINE) <= 6.0
+        for sign in (1.0, -1.0)
+    ]
+    plot_abutments(
+        out, x, profile[:, 1], lithostatic, time=sim.time, undercut=case.undercut, y=ABUTMENT_LINE, paper=near
+    )
+    result = {}
+    if abutment_rows:
+        last = abutment_rows[-1]
+        result["abutment_factor_left"], result["abutment_factor_right"] = last[4], last[7]
+        stages = max(r[1] for r in abutment_rows)
+        done = next(r for r in abutment_rows if r[1] == stages)
+        result["abutment_factor_undercut_done_left"] = done[4]
+        result["abutment_factor_undercut_done_right"] = done[7]
+        result["undercut_done_s"] = done[0]
+    return result
