@@ -381,3 +381,30 @@ def test_abutments_carry_the_undercut_load(quick_caving):
     assert float(done["left_factor"]) > 1.5 and float(done["right_factor"]) > 1.5
     assert summary["abutment_factor_undercut_done_left"] == float(done["left_factor"])
     assert summary["abutment_factor_undercut_done_right"] == float(done["right_factor"])
+
+
+def test_overburden_as_the_caps_weight_loads_the_block_as_the_pressure_does():
+    """Issue 37 (2), the piston lever: ``overburden="mass"`` replaces the
+    15.2 MPa face pressure by the weight of the top cap, whose density is
+    raised so that its weight is p W exactly (the cap's elements make whole
+    rows: 4 m of the nominal 5 m on the quick mesh), with no pressure left
+    on the face and the same geostatic stress below the cap."""
+    from fdem.caving import TOP_PRESSURE, UNIT_WEIGHT, WIDTH
+
+    from dataclasses import replace
+
+    m0, m1 = caving_model(CavingCase.quick()), caving_model(replace(CavingCase.quick(), overburden="mass"))
+    cap = m1.mesh.elements("cap")
+    area = m1.mesh.areas()[cap].sum()
+    assert 0.75 * 5.0 * WIDTH < area <= 5.0 * WIDTH
+    g = UNIT_WEIGHT / 3100.0
+    rho_cap = m1._materials[m1._element_material[cap[0]]].rho
+    assert (rho_cap - 3100.0) * g * area == pytest.approx(TOP_PRESSURE * WIDTH, rel=1e-12)
+    assert not m1._pressures and m0._pressures
+    below = np.setdiff1d(np.arange(m1.mesh.n_elements), cap)
+    s0, s1 = m0.kernel_arrays()["initial_stress"], m1.kernel_arrays()["initial_stress"]
+    assert np.array_equal(s0[below], s1[below])
+    with pytest.raises(ValueError, match="overburden"):
+        CavingCase(overburden="rock")
+    with pytest.raises(ValueError, match="cap"):
+        CavingCase(overburden="mass", cap=0.0)

@@ -63,6 +63,9 @@ __all__ = ["CavingCase", "caving_model", "run_caving", "probe_stress", "PAPER_PR
 # (fdem.caving_stress has its stresses and the frames)
 PAPER_PROBES: tuple[tuple[str, float, float], ...] = tuple((n, x, y) for n, x, y, *_ in PAPER_TABLE2)
 
+#: The ways the overburden can load the block (:class:`CavingCase`).
+OVERBURDEN = ("pressure", "mass")
+
 WIDTH, HEIGHT = 200.0, 100.0
 BOTTOM = -534.0  # the paper's probe coordinates put the block between y = −534 and −434 m
 TOP = BOTTOM + HEIGHT
@@ -145,7 +148,18 @@ class CavingCase:
     block's left side, which puts the paper's points at x = 0–16 m in the
     left abutment and those at x ≥ 38 m over the caved undercut, is the
     reading the paper's own numbers support (docs/caving.md, "Table 2
-    side by side"); ``"centred"`` measures x from the midline."""
+    side by side"); ``"centred"`` measures x from the midline.
+    ``overburden`` says how the 500 m of rock above the block load it:
+    ``"pressure"``, the paper's 15.2 MPa face load, a follower pressure on
+    the top face that pushes whatever lies under it, caved or not, at the
+    full 15.2 MPa; ``"mass"``, the same load as the weight of the top
+    ``cap`` layer, whose density is raised to ρ + p / (g cap), so that the
+    overburden over a caving column falls with it instead of driving it
+    down like a piston (docs/caving.md, "Table 2 side by side"). Both
+    start from the same geostatic state below the cap.
+    ``k0`` is the ratio of horizontal to vertical in-situ stress; ``None``
+    (the default) takes ν/(1 − ν) = 1/3, the state of no lateral strain
+    (DESIGN §4.6): the paper gives no ratio."""
 
     size: float = 1.0
     joint_scale: float = 1.0
@@ -165,10 +179,16 @@ class CavingCase:
     check_every: int = 6
     safety: float = 0.9
     probe_frame: str = "left"
+    overburden: str = "pressure"
+    k0: float | None = None
 
     def __post_init__(self) -> None:
         if self.probe_frame not in FRAMES:
             raise ValueError(f"CavingCase.probe_frame must be one of {FRAMES}, not {self.probe_frame!r}")
+        if self.overburden not in OVERBURDEN:
+            raise ValueError(f"CavingCase.overburden must be one of {OVERBURDEN}, not {self.overburden!r}")
+        if self.overburden == "mass" and not self.cap > 0:
+            raise ValueError(f"CavingCase.overburden = 'mass' needs a cap layer to carry it; cap = {self.cap}")
 
     @staticmethod
     def quick() -> CavingCase:
@@ -214,13 +234,22 @@ def caving_model(case: CavingCase | None = None) -> Model:
         done[ids] = True
         element_sets[f"undercut_{k}"] = ids
     mesh = mesh.with_sets(element_sets=element_sets)
-    elastic = Elastic(E=ROCK.E, nu=ROCK.nu, rho=ROCK.rho)
-    model = Model(mesh, materials={"rock": ROCK, "support": ROCK, "cap": elastic}).set_gravity(
-        0.0, -UNIT_WEIGHT / ROCK.rho
-    )
+    g = UNIT_WEIGHT / ROCK.rho
+    # the overburden as the cap's weight: p W = (ρ' − ρ) g A, with A the
+    # area of the elements that make the cap (whole rows: 4 m of a 5 m cap
+    # on the quick mesh)
+    cap_area = float(mesh.areas()[cap].sum())
+    rho_cap = ROCK.rho + (TOP_PRESSURE * WIDTH / (g * cap_area) if case.overburden == "mass" else 0.0)
+    elastic = Elastic(E=ROCK.E, nu=ROCK.nu, rho=rho_cap)
+    model = Model(mesh, materials={"rock": ROCK, "support": ROCK, "cap": elastic}).set_gravity(0.0, -g)
     model.fix("left", x=True, y=False).fix("right", x=True, y=False).fix("bottom")
-    model.pressure("top", TOP_PRESSURE)
-    model.set_geostatic_stress(top=TOP, pressure=TOP_PRESSURE)
+    model.set_geostatic_stress(top=TOP, pressure=TOP_PRESSURE, k0=case.k0)
+    if case.overburden == "pressure":
+        model.pressure("top", TOP_PRESSURE)
+    else:
+        # the heavy cap's own lithostatic state; below it the same as
+        # with the pressure
+        model.set_geostatic_stress(top=TOP, pressure=0.0, k0=case.k0, where="cap")
     model.contact(Interface(damping=0.5), interfaces={"joints": JOINTS}, cracks=CRACKS)
     model.fracture(insert_at=case.insert_at, min_size=case.min_size, check_every=case.check_every)
     for k in range(1, stages + 1):
