@@ -9,6 +9,7 @@ series behind.
 from __future__ import annotations
 
 import csv
+from collections.abc import Sequence
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -105,14 +106,30 @@ class VtuSeries:
         Where the files go (created if needed).
     name : str
         Base name: frames are ``{name}_{k:05d}.vtu``, the index
-        ``{name}.pvd`` and the energy history ``{name}_energy.csv``.
+        ``{name}.pvd``, the energy history ``{name}_energy.csv`` and, with
+        ``reactions``, the load–displacement history
+        ``{name}_reactions.csv``.
     overwrite : bool
         Replace an existing series of the same name. Without it an existing
         index is an error, so earlier results are never lost by accident.
+    reactions : sequence of str
+        Node groups of the model whose support load and mean displacement
+        (:meth:`fdem.Simulation.reaction`) go into ``{name}_reactions.csv``
+        at every frame and energy row: columns ``{group}_fx``, ``_fy``
+        (N per unit thickness, the force the model exerts on the group's
+        supports), ``{group}_ux``, ``_uy`` (m).
     """
 
-    def __init__(self, directory: str | os.PathLike[str], name: str = "fdem", *, overwrite: bool = False) -> None:
+    def __init__(
+        self,
+        directory: str | os.PathLike[str],
+        name: str = "fdem",
+        *,
+        overwrite: bool = False,
+        reactions: Sequence[str] = (),
+    ) -> None:
         self._place(directory, name)
+        self.reactions = list(reactions)
         if self.index.exists() and not overwrite:
             raise FileExistsError(f"{self.index} already exists; pass overwrite=True or choose another output name")
         for old in self.directory.glob(f"{name}_[0-9][0-9][0-9][0-9][0-9].vtu"):
@@ -122,8 +139,9 @@ class VtuSeries:
         #: Simulated time of the first frame: output times are ``origin + k
         #: output_every``, also after a restart.
         self.origin: float | None = None
-        if self.energy_csv.exists():
-            self.energy_csv.unlink()
+        for old_csv in (self.energy_csv, self.reactions_csv):
+            if old_csv.exists():
+                old_csv.unlink()
 
     def _place(self, directory: str | os.PathLike[str], name: str) -> None:
         self.directory = Path(directory)
@@ -131,6 +149,7 @@ class VtuSeries:
         self.directory.mkdir(parents=True, exist_ok=True)
         self.index = self.directory / f"{name}.pvd"
         self.energy_csv = self.directory / f"{name}_energy.csv"
+        self.reactions_csv = self.directory / f"{name}_reactions.csv"
 
     def state(self) -> dict[str, Any]:
         """What a checkpoint keeps of the series to continue it."""
@@ -139,6 +158,7 @@ class VtuSeries:
             "name": self.name,
             "frames": [[t, f] for t, f in self.frames],
             "origin": self.origin,
+            "reactions": self.reactions,
         }
 
     @classmethod
@@ -150,6 +170,7 @@ class VtuSeries:
         self._place(state["directory"], str(state["name"]))
         self.frames = [(float(t), str(f)) for t, f in state["frames"]]
         self.origin = None if state["origin"] is None else float(state["origin"])
+        self.reactions = [str(g) for g in state.get("reactions", [])]
         kept = {f for _, f in self.frames}
         # refuse before deleting anything
         missing = [f for f in kept if not (self.directory / f).exists()]
@@ -162,19 +183,8 @@ class VtuSeries:
             if old.name not in kept:
                 old.unlink()
         self._write_index()
-        self._energy_keys = None
-        if self.energy_csv.exists():
-            with open(self.energy_csv, newline="") as f:
-                rows = list(csv.reader(f))
-            if rows:
-                head, body = rows[0], rows[1:]
-                col = head.index("step")
-                body = [r for r in body if len(r) == len(head) and int(float(r[col])) <= step]
-                tmp = self.energy_csv.with_suffix(".csv.tmp")
-                with open(tmp, "w", newline="") as f:
-                    csv.writer(f).writerows([head, *body])
-                os.replace(tmp, self.energy_csv)
-                self._energy_keys = head
+        self._energy_keys = _truncate_history(self.energy_csv, step)
+        _truncate_history(self.reactions_csv, step)
         return self
 
     def write(self, sim: Simulation, energies: dict[str, float] | None = None) -> Path:
@@ -189,12 +199,14 @@ class VtuSeries:
         self.frames.append((sim.time, fname))
         self._write_index()
         self._append_energy(sim, sim.energies() if energies is None else energies)
+        self._append_reactions(sim)
         return self.directory / fname
 
     def record_energy(self, sim: Simulation, energies: dict[str, float] | None = None) -> None:
         """Adds the current state to the energy history only, without a
         frame (``energies``: ``sim.energies()``, if the caller has it)."""
         self._append_energy(sim, sim.energies() if energies is None else energies)
+        self._append_reactions(sim)
 
     def _write_index(self) -> None:
         lines = [
@@ -225,3 +237,42 @@ class VtuSeries:
             w.writerow(row)
             f.flush()
             os.fsync(f.fileno())
+
+    def _append_reactions(self, sim: Simulation) -> None:
+        if not self.reactions:
+            return
+        row: list[float] = [sim.time, sim.steps]
+        for group in self.reactions:
+            r = sim.reaction(group)
+            row += [*r["force"].tolist(), *r["displacement"].tolist()]
+        new = not self.reactions_csv.exists()
+        with open(self.reactions_csv, "a", newline="") as f:
+            w = csv.writer(f)
+            if new:
+                head = ["time", "step"]
+                for g in self.reactions:
+                    head += [f"{g}_fx", f"{g}_fy", f"{g}_ux", f"{g}_uy"]
+                w.writerow(head)
+            w.writerow(row)
+            f.flush()
+            os.fsync(f.fileno())
+
+
+def _truncate_history(path: Path, step: int) -> list[str] | None:
+    """Drops the rows of a history CSV (with a ``step`` column) written
+    after ``step`` (a resumed run writes them again); returns its header,
+    or None if there is no file or it is empty."""
+    if not path.exists():
+        return None
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    if not rows:
+        return None
+    head, body = rows[0], rows[1:]
+    col = head.index("step")
+    body = [r for r in body if len(r) == len(head) and int(float(r[col])) <= step]
+    tmp = path.with_suffix(".csv.tmp")
+    with open(tmp, "w", newline="") as f:
+        csv.writer(f).writerows([head, *body])
+    os.replace(tmp, path)
+    return head

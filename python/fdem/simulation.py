@@ -9,6 +9,7 @@ import math
 import os
 import time as _time
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -252,6 +253,39 @@ class Simulation:
     def velocities(self) -> NDArray[np.float64]:
         """Node velocities at the current whole step (m/s)."""
         return self._core.velocities()
+
+    def reaction_forces(self) -> NDArray[np.float64]:
+        """Reaction forces (N per unit thickness), shape (n_nodes, 2): the
+        force each node's support (a fixed or prescribed velocity
+        component, :meth:`Model.fix`, :meth:`Model.prescribe_velocity`)
+        exerts on the model at the current whole step; zero for free nodes
+        and components. It is the force that gives a held node its
+        prescribed velocity against the elements, loads, gravity, contact
+        and mass damping acting on it (the term whose work is the energy
+        ledger's ``support_work``)."""
+        return self._core.reaction_forces()
+
+    def node_origins(self) -> NDArray[np.int64]:
+        """The node of the model each node descends from (crack insertion
+        copies nodes; a copy of a held node keeps its support)."""
+        return self._core.node_origins()
+
+    def reaction(self, where: str | Any) -> dict[str, Any]:
+        """The load on a support: the force the model exerts on the
+        supports of the node group ``where`` (a group name or node ids of
+        the model; their copies made by crack insertion included), and the
+        group's mean displacement, at the current whole step.
+
+        Returns ``{"force": (2,) N per unit thickness, "displacement": (2,)
+        m, "nodes": int}``. The force is minus the sum of
+        :meth:`reaction_forces` over the group: a platen pressing down on a
+        specimen (prescribed ``vy < 0``) reads a positive ``force[1]``, the
+        specimen pushing it back up."""
+        ids = self.model.mesh.nodes(where)
+        mask = np.isin(self._core.node_origins(), ids)
+        r = self._core.reaction_forces()[mask]
+        u = self.displacements()[mask]
+        return {"force": -r.sum(axis=0), "displacement": u.mean(axis=0), "nodes": int(mask.sum())}
 
     def stress(self) -> NDArray[np.float64]:
         """Cauchy stress per element ``[xx, yy, zz, xy]`` (Pa, tension positive)."""
@@ -678,6 +712,7 @@ class Simulation:
         energy_tolerance: float = 0.01,
         stop_on_energy_error: bool = False,
         final_frame: bool = True,
+        reactions: Sequence[str] = (),
     ) -> Simulation:
         """Advances to simulated time ``until`` (s), writing a frame every
         ``output_every`` seconds into the directory ``output``.
@@ -709,6 +744,12 @@ class Simulation:
             for a driver that stops often between output times (the caving
             case stops every 0.05 s for its probe table; a frame at every
             stop cost 0.6 s each at the paper's scale).
+        reactions : sequence of str
+            Node groups (names of the model's mesh) whose support load and
+            mean displacement (:meth:`reaction`) are written at every frame
+            and energy row into ``{output}/{name}_reactions.csv``: the
+            load–displacement history of a platen or a support. Fixed when
+            the series starts; a resumed series keeps its groups.
 
         Ctrl-C stops the run within a second at a step boundary, after
         writing the current state as a frame and the checkpoint, and raises
@@ -736,7 +777,10 @@ class Simulation:
                 if key in self._resume and not overwrite:
                     self._series[key] = VtuSeries.resume(self._resume.pop(key), self.steps)
                 else:
-                    self._series[key] = VtuSeries(output, name, overwrite=overwrite)
+                    reactions = [reactions] if isinstance(reactions, str) else list(reactions)
+                    for group in reactions:
+                        self.model.mesh.nodes(group)  # an unknown group is named before anything is written
+                    self._series[key] = VtuSeries(output, name, overwrite=overwrite, reactions=reactions)
                     self._series[key].write(self)
             series = self._series[key]
         origin = series.origin if series is not None and series.origin is not None else self.time

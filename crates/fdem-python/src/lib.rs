@@ -696,6 +696,19 @@ impl PySimulation {
         guard(|| Ok(vec2_array(py, &self.sim.velocities())))
     }
 
+    /// The model node each node descends from, shape (n_nodes,), int64.
+    fn node_origins<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        let v: Vec<i64> = self.sim.node_origins().into_iter().map(i64::from).collect();
+        v.into_pyarray(py)
+    }
+
+    /// Reaction forces, shape (n_nodes, 2), a copy (N per unit thickness):
+    /// the force each node's support exerts on the model at the current
+    /// whole step, zero for free nodes and components.
+    fn reaction_forces<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        guard(|| Ok(vec2_array(py, &self.sim.reaction_forces())))
+    }
+
     /// Cauchy stress per element `[xx, yy, zz, xy]`, shape (n_elements, 4) (Pa).
     fn stress<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         guard(|| Ok(vec4_array(py, &self.sim.stress())))

@@ -466,19 +466,60 @@ impl Simulation {
             }
         }
         let damping = alpha * m * (v[0] * dx[0] + v[1] * dx[1]);
-        let mut support = 0.0;
+        let r = self.reaction_at(i, v);
+        let support = r[0] * dx[0] + r[1] * dx[1];
+        [kinetic, external, support, damping, contact, contact_damping]
+    }
+
+    /// The force node `i`'s support exerts on it at the current whole step
+    /// (N per unit thickness), zero in its free components and without a
+    /// support: `R = m (vⁿ − v^{n−½}) / (Δt^{n−½}/2) + α m vⁿ − f(xⁿ)` on
+    /// each held component, the force that brings the node from its last
+    /// half-step velocity to the prescribed whole-step velocity `vⁿ`
+    /// against the net force `f` of elements, loads, gravity and contact
+    /// (the same term the support work accumulates, DESIGN §4.2). `v` is
+    /// [`Self::whole_step_velocity`] of the node.
+    fn reaction_at(&self, i: usize, v: Vec2) -> Vec2 {
         let b = self.nodes.bc[i];
-        if b != NO_BC {
-            let f = self.net_force(i);
-            let c = &self.constraints[b as usize];
-            for d in 0..2 {
-                if c.fixed[d] {
-                    let reaction = m * (v[d] - half[d]) / h + alpha * m * v[d] - f[d];
-                    support += reaction * dx[d];
-                }
+        let h = 0.5 * self.dt_prev;
+        let m = self.nodes.mass[i];
+        let mut r = [0.0; 2];
+        if b == NO_BC || m <= 0.0 {
+            return r;
+        }
+        let f = self.net_force(i);
+        let c = &self.constraints[b as usize];
+        let alpha = self.settings.mass_damping;
+        let half = self.nodes.v[i];
+        for d in 0..2 {
+            if c.fixed[d] {
+                // before the first step there is no last half step: the
+                // support holds the node in static balance
+                let inertia = if h > 0.0 { m * (v[d] - half[d]) / h } else { 0.0 };
+                r[d] = inertia + alpha * m * v[d] - f[d];
             }
         }
-        [kinetic, external, support, damping, contact, contact_damping]
+        r
+    }
+
+    /// The node of the model each node descends from (by node id): itself
+    /// for a node of the model or one crack insertion placed on a split
+    /// edge, the node it was copied from for a copy (so a support's copies
+    /// are found by the support's nodes).
+    pub fn node_origins(&self) -> Vec<u32> {
+        self.node_rows(self.ancestor.clone())
+    }
+
+    /// Reaction forces: the force each node's support (a fixed or
+    /// prescribed velocity component) exerts on the model at the current
+    /// whole step (N per unit thickness), by node id, zero for free nodes
+    /// and components. The model exerts the opposite force on the support:
+    /// summed over a platen's nodes, that is the load of a load–displacement
+    /// curve. The sum of all reactions, loads, gravity and inertia is zero
+    /// (the node's equation of motion).
+    pub fn reaction_forces(&self) -> Vec<Vec2> {
+        let rows = (0..self.n_nodes()).map(|i| self.reaction_at(i, self.whole_step_velocity(i))).collect();
+        self.node_rows(rows)
     }
 
     /// The energy account at the current step.
