@@ -351,6 +351,61 @@ class Model:
         return list(self._stages)
 
     # --- initial state ----------------------------------------------------
+    def vary_strength(
+        self,
+        cv: float,
+        *,
+        where: str | Any | None = None,
+        distribution: str = "weibull",
+        correlation_length: float | None = None,
+        seed: int = 0,
+        levels: int = 64,
+    ) -> Model:
+        """Heterogeneous rock: multiplies the tensile strength ``ft``, the
+        cohesion ``c`` and the fracture energy ``Gf`` of each element's
+        Mohr–Coulomb–Rankine material by a random factor of mean 1 and
+        coefficient of variation ``cv`` (:func:`fdem.heterogeneity.strength_factors`:
+        ``distribution`` ``"weibull"`` or ``"lognormal"``, independent per
+        element or correlated over ``correlation_length`` m, from ``seed``,
+        in ``levels`` classes, each a material of its own).
+
+        ``ft`` and ``c`` scale together so that ``ft ≤ c cot φ`` holds for
+        every factor; ``Gf`` scales with them, so that the crack band's
+        snap-back limit ``2 E' Gf / ft²`` falls only as 1/factor. Elastic
+        materials and elements outside ``where`` (default: all) keep their
+        material. The same seed gives the same model, bit for bit.
+        """
+        from dataclasses import replace
+
+        from .heterogeneity import strength_factors
+
+        c = float(number("cv", cv))
+        ids = np.arange(self.mesh.n_elements) if where is None else self.mesh.elements(where)
+        plastic = np.array([isinstance(self._materials[m], MohrCoulombRankine) for m in self._element_material[ids]])
+        ids = ids[plastic] if len(ids) else ids
+        if len(ids) == 0:
+            raise ValueError("vary_strength: no element with a MohrCoulombRankine material" + (f" in {where!r}" if where is not None else ""))
+        factors = strength_factors(
+            self.mesh.centroids()[ids],
+            cv=c,
+            distribution=distribution,
+            correlation_length=None if correlation_length is None else float(positive("correlation_length", correlation_length)),
+            seed=int(whole("seed", seed, minimum=0)),
+            levels=int(whole("levels", levels)),
+        )
+        variants: dict[tuple[int, float], int] = {}
+        new = self._element_material.copy()
+        for e, w in zip(ids.tolist(), factors.tolist(), strict=True):
+            key = (int(self._element_material[e]), w)
+            if key not in variants:
+                base = self._materials[key[0]]
+                assert isinstance(base, MohrCoulombRankine)
+                variants[key] = len(self._materials)
+                self._materials.append(replace(base, ft=base.ft * w, c=base.c * w, Gf=base.Gf * w))
+            new[e] = variants[key]
+        self._element_material = new
+        return self
+
     def set_initial_velocity(
         self, value: tuple[float, float] | Any | Callable[[Any, Any], Any], where: str | Any | None = None
     ) -> Model:
