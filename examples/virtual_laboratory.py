@@ -14,7 +14,7 @@ frictionless platens at several confinements:
 from __future__ import annotations
 
 import fdem
-from fdem.laboratory import compression_specimen
+from fdem.laboratory import compression_specimen, run_specimen
 
 ROCK = fdem.MohrCoulombRankine(E=60e9, nu=0.25, rho=3100.0, c=8e6, phi=55.0, psi=9.0, ft=1e6, Gf=70.0)
 
@@ -45,9 +45,15 @@ def compression(confinement: float = 0.0, material: fdem.MohrCoulombRankine = RO
     }
 
 
-def main() -> None:
+def main(out: str = "virtual_laboratory_output") -> None:
+    """Prints each confinement's plateau against the closed form and writes
+    its stress–strain curve (``compression_<MPa>.csv`` and ``.png``, by
+    :func:`fdem.laboratory.run_specimen`) into ``out``."""
     print(f"UCS = {ROCK.ucs / 1e6:.2f} MPa, N_phi = {ROCK.n_phi:.3f}, N_psi = {ROCK.n_psi:.4f}")
     for p in (0.0, 2e6, 5e6, 10e6):
+        model = compression_specimen(ROCK, confinement=p, strain_rate=0.01, ramp=2e-3)
+        strain = 3.0 * (ROCK.n_phi * p + ROCK.ucs - p) / ROCK.plane_strain_modulus
+        run_specimen(model, strain, out=out, name=f"compression_{p / 1e6:g}MPa", stiffness_damping=2e-5)
         r = compression(p)
         print(
             f"confinement {p / 1e6:5.1f} MPa: plateau {r['axial'] / 1e6:7.2f} MPa, N_phi*s3 + UCS = "

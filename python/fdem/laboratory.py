@@ -23,6 +23,9 @@ __all__ = [
     "MaterialPointResult",
     "material_point",
     "compression_specimen",
+    "tension_specimen",
+    "run_specimen",
+    "SpecimenResult",
     "brazilian_disc",
     "run_brazilian",
     "BrazilianResult",
@@ -420,3 +423,152 @@ def _point_loads_sxx(xy: NDArray[np.float64], load: float, radius: float) -> NDA
     x, y = xy[:, 0], xy[:, 1]
     r1, r2 = x**2 + (radius - y) ** 2, x**2 + (radius + y) ** 2
     return -(2 * load / np.pi) * ((radius - y) * x**2 / r1**2 + (radius + y) * x**2 / r2**2 - 1 / (2 * radius))
+
+
+def tension_specimen(
+    material: Elastic,
+    *,
+    width: float = 0.05,
+    height: float = 0.1,
+    cells: tuple[int, int] = (8, 16),
+    strain_rate: float = 0.01,
+    ramp: float = 2e-4,
+) -> Model:
+    """A plane-strain direct-tension specimen: the base is held vertically
+    (its left corner also horizontally), the top pulled up at
+    ``strain_rate × height`` (m/s), reached over ``ramp`` (s); the sides
+    are free. Run it with :func:`run_specimen`; with a
+    :class:`MohrCoulombRankine` material crack insertion is on (contact on
+    the crack faces, DESIGN §4.5), so the specimen breaks."""
+    from .contact import Interface
+
+    w, h = positive("width", width), positive("height", height)
+    mesh = Mesh.rectangle(w, h, cells[0], cells[1])
+    model = Model(mesh, material=material)
+    model.fix("bottom", x=False, y=True).fix("lower_left", x=True, y=True)
+    model.prescribe_velocity(
+        "top", vy=positive("strain_rate", strain_rate) * h, amplitude=Amplitude.ramp(positive("ramp", ramp))
+    )
+    if hasattr(material, "ft"):
+        model.contact(Interface(friction=30.0)).fracture()
+    return model
+
+
+@dataclass(frozen=True)
+class SpecimenResult:
+    """A specimen test's curves (:func:`run_specimen`).
+
+    Attributes
+    ----------
+    kind : str
+        ``"compression"`` or ``"tension"`` (the sense of the top platen).
+    time, strain, stress : (k,) arrays
+        Samples: simulated time (s), axial strain (the top's travel over
+        the height, positive in the loading sense) and axial stress (Pa,
+        the load on the top platen over the width, positive in the
+        loading sense: compressive in compression, tensile in tension).
+    lateral_strain : (k,) array
+        Mean travel of the right side minus the left over the width
+        (positive outwards).
+    cracks : (k,) array of int
+        Crack insertions so far.
+    peak_stress, peak_strain : float
+        The largest axial stress (Pa) and the strain where it was reached.
+    simulation : fdem.Simulation
+        The run, at its end.
+    """
+
+    kind: str
+    time: NDArray[np.float64]
+    strain: NDArray[np.float64]
+    stress: NDArray[np.float64]
+    lateral_strain: NDArray[np.float64]
+    cracks: NDArray[np.int64]
+    peak_stress: float
+    peak_strain: float
+    simulation: Any
+
+    def write(self, out: str | os.PathLike[str], name: str = "specimen") -> list[Path]:
+        """Writes ``{name}.csv`` (the samples) and ``{name}.png`` (stress
+        against strain, the peak marked) into ``out``; returns their
+        paths."""
+        import matplotlib
+
+        matplotlib.use("Agg", force=False)
+        import matplotlib.pyplot as plt
+
+        d = Path(out)
+        d.mkdir(parents=True, exist_ok=True)
+        table = d / f"{name}.csv"
+        with open(table, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["time_s", "axial_strain", "axial_stress_Pa", "lateral_strain", "cracks"])
+            w.writerows(zip(self.time, self.strain, self.stress, self.lateral_strain, self.cracks, strict=True))
+        picture = d / f"{name}.png"
+        fig, ax = plt.subplots(figsize=(6.5, 4.5), dpi=110)
+        ax.plot(self.strain * 1e3, self.stress / 1e6, label=f"{self.kind}")
+        ax.plot([self.peak_strain * 1e3], [self.peak_stress / 1e6], "r*", ms=10, label=f"peak {self.peak_stress / 1e6:.2f} MPa")
+        ax.set_xlabel("axial strain (‰)")
+        ax.set_ylabel(f"axial stress (MPa, {'compression' if self.kind == 'compression' else 'tension'} positive)")
+        ax.set_title(f"{self.kind.capitalize()} specimen: {int(self.cracks[-1])} cracks at the end")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(picture)
+        plt.close(fig)
+        return [table, picture]
+
+
+def run_specimen(
+    model: Model,
+    until_strain: float,
+    *,
+    samples: int = 100,
+    out: str | os.PathLike[str] | None = None,
+    name: str = "specimen",
+    threads: int | None = None,
+    stiffness_damping: float = 0.0,
+) -> SpecimenResult:
+    """Runs a specimen of :func:`compression_specimen` or
+    :func:`tension_specimen` until its axial strain is ``until_strain``,
+    taking ``samples`` samples of the load on the top platen
+    (:meth:`fdem.Simulation.reaction`) and the strains; writes
+    ``{name}.csv`` and ``{name}.png`` into ``out`` if given."""
+    from .simulation import Simulation
+
+    mesh = model.mesh
+    top = mesh.nodes("top")
+    drive = [c for c in model._constraints if np.array_equal(c.nodes, top)]
+    if not drive:
+        raise ValueError("run_specimen needs a specimen model (a top platen with a prescribed velocity)")
+    v = float(np.asarray(drive[-1].value)[..., 1].max())
+    ramp = drive[-1].amplitude.times[-1] if drive[-1].amplitude is not None else 0.0
+    lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
+    width, height = float(hi[0] - lo[0]), float(hi[1] - lo[1])
+    sense = 1.0 if v > 0 else -1.0  # +1 tension, −1 compression
+    until = 0.5 * ramp + positive("until_strain", until_strain) * height / abs(v)
+    sim = Simulation(model, threads=threads, stiffness_damping=stiffness_damping)
+    left, right = mesh.nodes("left"), mesh.nodes("right")
+    rows = []
+    for k in range(1, int(samples) + 1):
+        sim.run(until=until * k / samples, progress=False, checkpoint=False)
+        r = sim.reaction("top")
+        u = sim.displacements()
+        lateral = (u[right, 0].mean() - u[left, 0].mean()) / width
+        rows.append([sim.time, sense * r["displacement"][1] / height, -sense * r["force"][1] / width, lateral, sim.insertions])
+    data = np.array(rows)
+    k = int(np.argmax(data[:, 2]))
+    result = SpecimenResult(
+        kind="tension" if sense > 0 else "compression",
+        time=data[:, 0],
+        strain=data[:, 1],
+        stress=data[:, 2],
+        lateral_strain=data[:, 3],
+        cracks=data[:, 4].astype(np.int64),
+        peak_stress=float(data[k, 2]),
+        peak_strain=float(data[k, 1]),
+        simulation=sim,
+    )
+    if out is not None:
+        result.write(out, name)
+    return result
