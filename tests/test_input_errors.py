@@ -138,3 +138,104 @@ def test_inverted_element_stops_after_valid_output(tmp_path):
         m = meshio.read(tmp_path / f)
         assert len(m.cells[0].data) == mesh.n_elements
     assert not list(tmp_path.glob("*.tmp"))
+
+
+# --- issue 36, point 4: unit slips, impossible values, bounded work --------
+
+
+@pytest.mark.parametrize(
+    ("make", "word"),
+    [
+        (lambda: fdem.Elastic(E=30e3, nu=0.25, rho=2700.0), "E = 30000 Pa"),
+        (lambda: fdem.Elastic(E=30e9, nu=0.25, rho=2.6), "rho = 2.6"),
+        (
+            lambda: fdem.MohrCoulombRankine(E=30e9, nu=0.25, rho=2700.0, c=1e6, phi=0.6, psi=0.1, ft=1e5, Gf=50.0),
+            "phi = 0.6 degrees",
+        ),
+        (
+            lambda: fdem.MohrCoulombRankine(E=30e9, nu=0.25, rho=2700.0, c=8.0, phi=30.0, psi=0.0, ft=1.0, Gf=50.0),
+            "c = 8 Pa",
+        ),
+        (lambda: fdem.Interface(friction=0.6), "friction = 0.6 degrees"),
+    ],
+)
+def test_a_likely_unit_slip_warns_naming_the_parameter(make, word):
+    """Allowed but almost certainly a slip of units: a PlausibilityWarning
+    that names the parameter and the likely mistake."""
+    from fdem.errors import PlausibilityWarning
+
+    with pytest.warns(PlausibilityWarning, match=word):
+        make()
+
+
+def _tiny_model(**material):
+    mesh = fdem.Mesh.rectangle(1.0, 1.0, 2, 2)
+    return fdem.Model(mesh, material=fdem.Elastic(**{"E": 30e9, "nu": 0.25, "rho": 2700.0, **material}))
+
+
+def test_impossible_values_are_value_errors_naming_the_parameter(tmp_path):
+    """A stage before time zero, a run back in time, frames without a
+    folder, a modulus or density that makes the step infinite, an initial
+    stress whose energy is infinite: each a ValueError that names it."""
+    import warnings
+
+    with pytest.raises(ValueError, match="at = -0.5"):
+        _tiny_model().excavate([0], at=-0.5)
+    sim = fdem.Simulation(_tiny_model())
+    with pytest.raises(ValueError, match="until = -1"):
+        sim.run(until=-1.0, progress=False)
+    with pytest.raises(ValueError, match="output_every needs output"):
+        sim.run(until=1e-4, output_every=1e-5, progress=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for bad in ({"E": 5e-324}, {"rho": 5e-324}):
+            with pytest.raises(ValueError, match="stable time step"):
+                fdem.Simulation(_tiny_model(**bad))
+    with pytest.raises(ValueError, match="initial stress of element 0"):
+        fdem.Simulation(_tiny_model().set_initial_stress((1e308, 1e308, 0.0, 0.0)))
+    from fdem.output import principal_stresses
+
+    with pytest.raises(ValueError, match="shape"):
+        principal_stresses(np.zeros(3))
+
+
+def test_nothing_hangs_on_a_bad_size(tmp_path):
+    """An output interval far below the step writes a frame per step and
+    returns (it counted through 1e11 skipped output times before); a joint
+    spacing or period far below the region, and a disc of kilometres meshed
+    at a millimetre, are refused before any work (each took minutes or
+    gigabytes)."""
+    import time
+
+    sim = fdem.Simulation(_tiny_model())
+    t0 = time.perf_counter()
+    sim.run(until=1e-4, output_every=1e-15, output=tmp_path, progress=False)
+    assert time.perf_counter() - t0 < 5.0
+    for joint in (fdem.JointSet(0.0, 1.0, 0.0, 1e-300), fdem.JointSet(0.0, 5e-324, 0.0, 1.0)):
+        with pytest.raises(ValueError, match="traces"):
+            joint.traces((0.0, 0.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match="nodes"):
+        fdem.Mesh.disc(2700.0, 0.001)
+    with pytest.raises(ValueError, match="max_nodes"):
+        fdem.Mesh.polygon([[0, 0], [1000, 0], [1000, 1000], [0, 1000]], 0.01)
+
+
+def test_a_damaged_model_file_is_refused_naming_it(tmp_path):
+    """Model files carry a SHA-256 of the model: every one of 200 random
+    single-bit flips is a ValueError naming the file (18 of 40 loaded as
+    another model before); a file of junk too."""
+    import random
+
+    path = tmp_path / "m.fdem"
+    _tiny_model().save(path)
+    assert isinstance(fdem.Model.load(path), fdem.Model)
+    data = path.read_bytes()
+    rng = random.Random(1)
+    for _ in range(200):
+        flipped = bytearray(data)
+        k = rng.randrange(len(data))
+        flipped[k] ^= 1 << rng.randrange(8)
+        bad = tmp_path / "bad.fdem"
+        bad.write_bytes(bytes(flipped))
+        with pytest.raises(ValueError, match="bad.fdem"):
+            fdem.Model.load(bad)

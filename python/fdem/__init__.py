@@ -25,6 +25,7 @@ from .errors import (
     EnergyGrowthError,
     InvertedElementError,
     NonFiniteError,
+    PlausibilityWarning,
     SimulationError,
 )
 from .joints import JointSet, jointed_rectangle
@@ -41,6 +42,7 @@ __all__ = [
     "Elastic",
     "EnergyBalanceError",
     "EnergyBalanceWarning",
+    "PlausibilityWarning",
     "EnergyGrowthError",
     "MaterialPointResult",
     "MohrCoulombRankine",

@@ -9,6 +9,7 @@ import math
 from dataclasses import dataclass
 
 from ._checks import number
+from .errors import warn_implausible
 
 __all__ = ["Interface"]
 
@@ -65,6 +66,11 @@ class Interface:
             object.__setattr__(self, name, number(name, getattr(self, name)))
         if not 0 <= self.friction < 90:
             raise ValueError(f"friction = {self.friction} must lie in [0, 90) degrees (interface friction angle)")
+        if 0 < self.friction < 1:
+            warn_implausible(
+                f"friction = {self.friction:g} degrees: the friction angle is in degrees (a friction "
+                f"coefficient of {self.friction:g} is {math.degrees(math.atan(self.friction)):.1f} degrees)"
+            )
         if self.cohesion < 0:
             raise ValueError(f"cohesion = {self.cohesion} must be >= 0 (interface cohesion, Pa)")
         if self.damping < 0:

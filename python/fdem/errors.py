@@ -107,6 +107,19 @@ class EnergyBalanceWarning(UserWarning):
     largest term by default) at an output step."""
 
 
+class PlausibilityWarning(UserWarning):
+    """A parameter is allowed but almost certainly a slip of units (a
+    modulus in MPa, a density in t/m³, an angle in radians); the message
+    names the parameter and the likely mistake."""
+
+
+def warn_implausible(message: str, stacklevel: int = 3) -> None:
+    """Issues a :class:`PlausibilityWarning` at the caller's caller."""
+    import warnings
+
+    warnings.warn(message, PlausibilityWarning, stacklevel=stacklevel + 1)
+
+
 class CheckpointError(ValueError):
     """A checkpoint could not be written or read: the file is not a
     checkpoint, is truncated or corrupted, was written by a newer fdem, or

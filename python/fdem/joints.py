@@ -99,7 +99,17 @@ class JointSet:
         period = self.persistence + self.bridge
         rng = np.random.default_rng(self.seed)
         out = []
-        n_lines = int(math.floor((s_hi - s_lo) / self.spacing))
+        # bound the work before doing it: a spacing or period far below the
+        # region's size (a slip of units) would run without end
+        with np.errstate(over="ignore", divide="ignore"):
+            lines = float(np.float64(s_hi - s_lo) / self.spacing)
+            per_line = float(np.float64(t_hi - t_lo) / period) + 2 if period > 0 else math.inf
+        if not lines * per_line <= _MAX_TRACES:
+            raise ValueError(
+                f"joint set '{self.name}': spacing {self.spacing:g} m and persistence + bridge {period:g} m would "
+                f"give about {lines * per_line:.3g} traces in the region (at most {_MAX_TRACES:.0e}); check the units"
+            )
+        n_lines = int(math.floor(lines))
         for k in range(n_lines + 1):
             s = s_lo + (k + 0.5) * self.spacing
             if self.jitter:
@@ -115,6 +125,10 @@ class JointSet:
                     out.append(seg)
                 t += period
         return np.array(out, dtype=float).reshape(-1, 2, 2)
+
+
+#: The most traces one set may generate in a region (a bound on the work).
+_MAX_TRACES = 1e7
 
 
 def _clip(p: NDArray[Any], q: NDArray[Any], bounds: tuple[float, float, float, float]) -> NDArray[Any] | None:

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ._checks import number
+from .errors import warn_implausible
 
 __all__ = ["Elastic", "MohrCoulombRankine"]
 
@@ -44,6 +45,12 @@ class Elastic:
             raise ValueError(f"nu = {self.nu} must lie in (-1, 0.5) (Poisson's ratio)")
         if self.rho <= 0:
             raise ValueError(f"rho = {self.rho} must be positive (density, kg/m³)")
+        if self.E < 1e6:
+            warn_implausible(
+                f"E = {self.E:g} Pa is below 1 MPa: Young's modulus is in Pa (30 GPa is 30e9), not MPa or GPa"
+            )
+        if self.rho < 100.0:
+            warn_implausible(f"rho = {self.rho:g} kg/m³ is below 100: density is in kg/m³ (2.7 t/m³ is 2700)")
 
     @property
     def shear_modulus(self) -> float:
@@ -124,6 +131,15 @@ class MohrCoulombRankine(Elastic):
             raise ValueError(f"phi = {self.phi} must lie in [0, 90) degrees (friction angle)")
         if not 0 <= self.psi < 90:
             raise ValueError(f"psi = {self.psi} must lie in [0, 90) degrees (dilation angle)")
+        if 0 < self.phi < 1:
+            warn_implausible(
+                f"phi = {self.phi:g} degrees: angles are in degrees ({self.phi:g} rad would be "
+                f"{math.degrees(self.phi):.1f} degrees)"
+            )
+        for name in ("c", "ft"):
+            value = getattr(self, name)
+            if 0 < value < 1e3:
+                warn_implausible(f"{name} = {value:g} Pa is below 1 kPa: strengths are in Pa (5 MPa is 5e6)")
         if self.psi > self.phi:
             raise ValueError(f"psi = {self.psi} must not exceed phi = {self.phi} (dilation above friction)")
         if self.ft <= 0:

@@ -420,6 +420,16 @@ class Mesh:
         """
         pts = float_array("outline", outline, (None, 2))
         s = positive("size", size)
+        # the node count the refinement heads for, known before it starts:
+        # about A / (√3/4 s²) / 2 nodes for the polygon's area A
+        x, y = pts[:, 0], pts[:, 1]
+        area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+        expected = area / (np.sqrt(3) / 4 * s * s) / 2
+        if not expected <= max_nodes:
+            raise ValueError(
+                f"size = {s:g} m would mesh the polygon (area {area:.3g} m²) with about {expected:.3g} nodes, "
+                f"more than max_nodes = {max_nodes}; check the units of size"
+            )
         points, triangles, _ = _core.triangulate(
             np.ascontiguousarray(pts), np.zeros((0, 4)), np.sqrt(3) / 4 * s * s, float(min_angle), int(max_nodes)
         )
@@ -432,6 +442,12 @@ class Mesh:
         its circle a polygon of sides about ``size`` long (see
         :meth:`polygon`). The facet set ``boundary`` holds the rim."""
         r, s = positive("radius", radius), positive("size", size)
+        expected = np.pi * r * r / (np.sqrt(3) / 4 * s * s) / 2
+        if not expected <= 2_000_000:
+            raise ValueError(
+                f"size = {s:g} m would mesh a disc of radius {r:g} m with about {expected:.3g} nodes "
+                "(at most 2e6); check the units of radius and size"
+            )
         k = max(12, int(np.ceil(2 * np.pi * r / s)))
         a = 2 * np.pi * np.arange(k) / k
         return cls.polygon(np.column_stack([center[0] + r * np.cos(a), center[1] + r * np.sin(a)]), s)

@@ -25,7 +25,7 @@ __all__ = ["Amplitude", "Model"]
 Material = Elastic | MohrCoulombRankine
 
 _FORMAT = "fdem-model"
-_VERSION = 1
+_VERSION = 2  # 2: the model as bytes with a SHA-256 checksum
 
 
 @dataclass(frozen=True)
@@ -339,6 +339,8 @@ class Model:
         nodes; nodes left without elements leave the model; the energy they
         take away is booked as ``excavated``. Stages run in time order."""
         t = number("at", at)
+        if t < 0:
+            raise ValueError(f"at = {t} s must not be negative (the time of the excavation stage)")
         ids = self.mesh.elements(where)
         if len(ids) == 0:
             raise ValueError(f"excavation stage at {t} s has no elements")
@@ -516,27 +518,49 @@ class Model:
 
     # --- persistence ------------------------------------------------------
     def save(self, path: str | os.PathLike[str]) -> None:
-        """Writes the model to a file (pickle with a format header), atomically."""
+        """Writes the model to a file (pickle with a format header and a
+        SHA-256 checksum of the model's bytes), atomically."""
+        import hashlib
+
+        body = pickle.dumps(self, protocol=4)
         tmp = f"{os.fspath(path)}.tmp"
         with open(tmp, "wb") as f:
-            pickle.dump({"format": _FORMAT, "version": _VERSION, "model": self}, f, protocol=4)
+            pickle.dump(
+                {"format": _FORMAT, "version": _VERSION, "sha256": hashlib.sha256(body).hexdigest(), "body": body},
+                f,
+                protocol=4,
+            )
         os.replace(tmp, path)
 
     @staticmethod
     def load(path: str | os.PathLike[str]) -> Model:
-        """Reads a model written by :meth:`save`. Only load files you trust
-        (the format is a pickle)."""
+        """Reads a model written by :meth:`save`. A damaged or edited file
+        (its checksum does not match) is a ValueError naming the file.
+        Only load files you trust (the format is a pickle)."""
+        import hashlib
+
         try:
             with open(path, "rb") as f:
                 data = pickle.load(f)
-        except (OSError, pickle.UnpicklingError, EOFError) as exc:
-            raise ValueError(f"{path}: not a readable fdem model file ({exc})") from None
+        except Exception as exc:  # noqa: BLE001 - a damaged pickle raises anything
+            raise ValueError(f"{path}: not a readable fdem model file ({type(exc).__name__}: {exc})") from None
         if not isinstance(data, dict) or data.get("format") != _FORMAT:
             raise ValueError(f"{path}: not an fdem model file")
-        if data.get("version", 0) > _VERSION:
-            raise ValueError(f"{path}: written by a newer fdem (format {data['version']} > {_VERSION})")
-        model = data["model"]
-        assert isinstance(model, Model)
+        version = data.get("version", 0)
+        if not isinstance(version, int) or version > _VERSION:
+            raise ValueError(f"{path}: written by a newer fdem (format {version!r} > {_VERSION})")
+        if version >= 2:
+            body = data.get("body")
+            if not isinstance(body, bytes) or hashlib.sha256(body).hexdigest() != data.get("sha256"):
+                raise ValueError(f"{path}: damaged fdem model file (its checksum does not match)")
+            try:
+                model = pickle.loads(body)
+            except Exception as exc:  # noqa: BLE001
+                raise ValueError(f"{path}: damaged fdem model file ({type(exc).__name__}: {exc})") from None
+        else:
+            model = data.get("model")
+        if not isinstance(model, Model):
+            raise ValueError(f"{path}: damaged fdem model file (no model in it)")
         return model
 
     # --- kernel arrays ----------------------------------------------------
@@ -603,7 +627,7 @@ class Model:
                 raise ValueError("fracture needs contact: call model.contact(...) (crack faces are contact surfaces)")
             f = self._fracture
             out.update(
-                fracture_interval=f["interval"],
+                fracture_interval=whole("check_every", f["interval"]),
                 fracture_edge_tolerance=f["edge"],
                 fracture_crack_tolerance=f["crack"],
                 fracture_min_quality=f["quality"],

@@ -27,6 +27,9 @@ __all__ = ["VtuSeries", "write_vtu", "principal_stresses"]
 def principal_stresses(stress: NDArray[np.float64]) -> NDArray[np.float64]:
     """Principal stresses ``σ1 ≥ σ2 ≥ σ3`` (Pa) of ``[xx, yy, zz, xy]`` rows,
     with ``σ_zz`` as one of the three, shape (n, 3)."""
+    stress = np.asarray(stress, dtype=float)
+    if stress.ndim != 2 or stress.shape[1] != 4:
+        raise ValueError(f"stress must have shape (n, 4) ([xx, yy, zz, xy] rows), got {stress.shape}")
     mean = 0.5 * (stress[:, 0] + stress[:, 1])
     r = np.hypot(0.5 * (stress[:, 0] - stress[:, 1]), stress[:, 3])
     p = np.column_stack([mean + r, mean - r, stress[:, 2]])

@@ -116,6 +116,7 @@ class Simulation:
         arrays = model.kernel_arrays()
         self._fingerprint = _fingerprint(arrays)
         self._core = _core.Simulation(**arrays, **self._settings, threads=int(threads or 0))
+        self._check_start(model)
         self._series: dict[tuple[str, str], VtuSeries] = {}
         self._resume: dict[tuple[str, str], dict[str, Any]] = {}
         self.user_data: dict[str, Any] = {}
@@ -124,6 +125,26 @@ class Simulation:
         :meth:`from_checkpoint`: a driver script that keeps tables beside the
         run (probe histories, counters) stores them here, so that they always
         match the state they were saved with."""
+
+    def _check_start(self, model: Model) -> None:
+        """Refuses a start that can only give infinities: a stable step that
+        is not a positive finite number (a modulus or density at the ends of
+        the float range), or an initial state whose energy is not finite."""
+        dt = self._core.time_step
+        if not (math.isfinite(dt) and dt > 1e-300):
+            speeds = [(m, math.sqrt(m.E / m.rho) if m.rho > 0 else math.inf) for m in model._materials]
+            worst = max(speeds, key=lambda p: abs(math.log(p[1])) if 0 < p[1] < math.inf else math.inf)[0]
+            raise ValueError(
+                f"the stable time step is {dt:g} s: E = {worst.E:g} Pa and rho = {worst.rho:g} kg/m³ give a wave "
+                "speed of zero or infinity; check the material's units"
+            )
+        e = self._core.energies()
+        if not (math.isfinite(e["elastic_initial"]) and math.isfinite(e["kinetic_initial"])):
+            stress = model._initial_stress
+            if stress is not None and not np.all(np.isfinite(stress) & (np.abs(stress) < 1e150)):
+                k = int(np.argmax(np.where(np.isfinite(stress), np.abs(stress), np.inf).max(axis=1)))
+                raise ValueError(f"initial stress of element {k} is {stress[k].tolist()} Pa: its energy is not finite")
+            raise ValueError("the initial state's energy is not finite: check the initial stress and velocities")
 
     @staticmethod
     def _check_settings(
@@ -766,8 +787,12 @@ class Simulation:
             stay valid.
         """
         until = number("until", until)
+        if until < self.time:
+            raise ValueError(f"until = {until:g} s is before the current time {self.time:g} s (a run goes forward)")
         if output_every is not None:
             output_every = positive("output_every", output_every)
+            if output is None:
+                raise ValueError("output_every needs output= (the directory the frames go to)")
         tolerance = positive("energy_tolerance", energy_tolerance)
         ckpt = self._checkpoint_path(checkpoint, output, name)
         series = None
@@ -823,9 +848,15 @@ class Simulation:
                     bar.update(self.time, self.steps)
                     if self.time >= next_out:
                         self._audit(frame(), tolerance, stop_on_energy_error, warned, ckpt)
-                    while self.time >= next_out:
-                        k_next += 1
+                    if self.time >= next_out:
+                        # the next output time after now, in one step (an
+                        # output interval far below the time step would
+                        # take forever counting through the skipped ones)
+                        k_next = max(k_next + 1, math.floor((self.time - origin) / output_every) + 1)  # type: ignore[operator]
                         next_out = origin + k_next * output_every  # type: ignore[operator]
+                        while self.time >= next_out:
+                            k_next += 1
+                            next_out = origin + k_next * output_every  # type: ignore[operator]
                     # an in-memory copy of a good state to fall back on
                     # (a replay from it gives the step before a failure);
                     # its cost is kept under 1% of the run (0.15 s for the
