@@ -31,7 +31,9 @@ def main(
     from the elastic solution before 0.9 of the peak, and the share of the
     crack length in the central 80% of the disc that lies within 0.1 D of
     the loaded diameter."""
-    result = run_brazilian(brazilian_disc(ROCK, elements_across_radius=elements_across_radius, loading=loading), out=out)
+    result = run_brazilian(
+        brazilian_disc(ROCK, elements_across_radius=elements_across_radius, loading=loading), out=out
+    )
     radius = 0.5 * result.diameter
     elastic = (result.load > 0.2 * result.peak_load) & (result.load < 0.9 * result.peak_load)
     first = result.first_crack

@@ -400,9 +400,9 @@ def test_overburden_as_the_caps_weight_loads_the_block_as_the_pressure_does():
     raised so that its weight is p W exactly (the cap's elements make whole
     rows: 4 m of the nominal 5 m on the quick mesh), with no pressure left
     on the face and the same geostatic stress below the cap."""
-    from fdem.caving import TOP_PRESSURE, UNIT_WEIGHT, WIDTH
-
     from dataclasses import replace
+
+    from fdem.caving import TOP_PRESSURE, UNIT_WEIGHT, WIDTH
 
     m0 = caving_model(replace(CavingCase.quick(), overburden="pressure"))
     m1 = caving_model(CavingCase.quick())

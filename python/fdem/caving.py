@@ -37,12 +37,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .contact import Interface
-from .errors import SimulationError
-from .joints import JointSet, jointed_rectangle
-from .materials import Elastic, MohrCoulombRankine
-from .model import Model
-from .plot import plot_field
 from .caving_stress import (
     ABUTMENT_LINE,
     FRAMES,
@@ -55,6 +49,12 @@ from .caving_stress import (
     stress_profile,
     write_table2,
 )
+from .contact import Interface
+from .errors import SimulationError
+from .joints import JointSet, jointed_rectangle
+from .materials import Elastic, MohrCoulombRankine
+from .model import Model
+from .plot import plot_field
 from .simulation import Simulation
 
 __all__ = ["CavingCase", "caving_model", "run_caving", "probe_stress", "PAPER_PROBES"]
@@ -488,9 +488,7 @@ def run_caving(
             # rows of a sample cut short before it was counted are dropped
             # by ``_trim``
             book["probes"].extend(rows)
-            peaks = abutment_peaks(
-                sim, width=WIDTH, undercut=case.undercut, size=case.size, lithostatic=lithostatic
-            )
+            peaks = abutment_peaks(sim, width=WIDTH, undercut=case.undercut, size=case.size, lithostatic=lithostatic)
             book["abutment"].append([sim.time, sim.stages_done, *peaks.values()])
             book["samples"] += 1
             book["sampled"] = t

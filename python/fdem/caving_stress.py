@@ -91,9 +91,7 @@ def probe_stress(sim: Simulation, points: Any) -> NDArray[np.float64]:
     return out
 
 
-def stress_profile(
-    sim: Simulation, y: float, x_edges: NDArray[np.float64], half_height: float
-) -> NDArray[np.float64]:
+def stress_profile(sim: Simulation, y: float, x_edges: NDArray[np.float64], half_height: float) -> NDArray[np.float64]:
     """Stress ``[xx, yy, zz, xy]`` (Pa) along the horizontal line ``y`` (m):
     the area-weighted mean over the active elements whose centroid lies in
     each box ``[x_edges[i], x_edges[i+1]) × [y − half_height, y + half_height]``
@@ -145,9 +143,7 @@ def abutment_peaks(
     return out
 
 
-def write_table2(
-    out: Path, rows: list[list[float]], frame: str, points: NDArray[np.float64]
-) -> list[list[Any]]:
+def write_table2(out: Path, rows: list[list[float]], frame: str, points: NDArray[np.float64]) -> list[list[Any]]:
     """Writes ``table2.csv`` and ``table2.md``: the paper's four stresses
     beside ours (and at the mirror points) at the last sample of ``rows``
     (the probe table of :func:`fdem.caving.run_caving`). Returns the rows

@@ -50,9 +50,7 @@ def _normal_cdf(z: NDArray[np.float64]) -> NDArray[np.float64]:
     return (0.5 * (1.0 + erf(z / math.sqrt(2.0)).astype(float))).astype(float)
 
 
-def _gaussian_field(
-    points: NDArray[np.float64], length: float, rng: np.random.Generator
-) -> NDArray[np.float64]:
+def _gaussian_field(points: NDArray[np.float64], length: float, rng: np.random.Generator) -> NDArray[np.float64]:
     """A standard normal random field at ``points`` (n, 2) with the
     correlation ``exp(−d²/ℓ²)``: white noise on a grid of spacing ℓ/4
     smoothed by a Gaussian kernel of standard deviation ℓ/2 (the

@@ -4,9 +4,9 @@ virtual laboratory specimens (plane-strain compression, triaxial, tension).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 import csv
 import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -310,9 +310,7 @@ class BrazilianResult:
         with open(table, "w", newline="") as f:
             w = csv.writer(f)
             w.writerow(["time_s", "closure_m", "load_N_per_m", "centre_sxx_Pa", "centre_sxx_elastic_Pa"])
-            w.writerows(
-                zip(self.time, self.closure, self.load, self.centre_stress, self.centre_reference, strict=True)
-            )
+            w.writerows(zip(self.time, self.closure, self.load, self.centre_stress, self.centre_reference, strict=True))
         picture = d / "brazilian.png"
         fig, ax = plt.subplots(figsize=(6.5, 4.5), dpi=110)
         ax.plot(self.closure * 1e6, self.load / 1e3, label="load")
@@ -366,7 +364,9 @@ def run_brazilian(
             if np.array_equal(c.nodes, mesh.nodes(name)):
                 driven[name] = c
     if len(driven) != 2:
-        raise ValueError("run_brazilian needs a model of brazilian_disc (loaders driven at loader_top and loader_bottom)")
+        raise ValueError(
+            "run_brazilian needs a model of brazilian_disc (loaders driven at loader_top and loader_bottom)"
+        )
     # the rate at which the loaders close, and the time they take to reach it
     speed = sum(abs(float(np.asarray(c.value)[..., 1].max())) for c in driven.values())
     ramp = max(c.amplitude.times[-1] if c.amplitude is not None else 0.0 for c in driven.values())
@@ -507,7 +507,13 @@ class SpecimenResult:
         picture = d / f"{name}.png"
         fig, ax = plt.subplots(figsize=(6.5, 4.5), dpi=110)
         ax.plot(self.strain * 1e3, self.stress / 1e6, label=f"{self.kind}")
-        ax.plot([self.peak_strain * 1e3], [self.peak_stress / 1e6], "r*", ms=10, label=f"peak {self.peak_stress / 1e6:.2f} MPa")
+        ax.plot(
+            [self.peak_strain * 1e3],
+            [self.peak_stress / 1e6],
+            "r*",
+            ms=10,
+            label=f"peak {self.peak_stress / 1e6:.2f} MPa",
+        )
         ax.set_xlabel("axial strain (‰)")
         ax.set_ylabel(f"axial stress (MPa, {'compression' if self.kind == 'compression' else 'tension'} positive)")
         ax.set_title(f"{self.kind.capitalize()} specimen: {int(self.cracks[-1])} cracks at the end")
@@ -555,7 +561,9 @@ def run_specimen(
         r = sim.reaction("top")
         u = sim.displacements()
         lateral = (u[right, 0].mean() - u[left, 0].mean()) / width
-        rows.append([sim.time, sense * r["displacement"][1] / height, -sense * r["force"][1] / width, lateral, sim.insertions])
+        rows.append(
+            [sim.time, sense * r["displacement"][1] / height, -sense * r["force"][1] / width, lateral, sim.insertions]
+        )
     data = np.array(rows)
     k = int(np.argmax(data[:, 2]))
     result = SpecimenResult(

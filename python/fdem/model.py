@@ -386,12 +386,17 @@ class Model:
         plastic = np.array([isinstance(self._materials[m], MohrCoulombRankine) for m in self._element_material[ids]])
         ids = ids[plastic] if len(ids) else ids
         if len(ids) == 0:
-            raise ValueError("vary_strength: no element with a MohrCoulombRankine material" + (f" in {where!r}" if where is not None else ""))
+            raise ValueError(
+                "vary_strength: no element with a MohrCoulombRankine material"
+                + (f" in {where!r}" if where is not None else "")
+            )
         factors = strength_factors(
             self.mesh.centroids()[ids],
             cv=c,
             distribution=distribution,
-            correlation_length=None if correlation_length is None else float(positive("correlation_length", correlation_length)),
+            correlation_length=None
+            if correlation_length is None
+            else float(positive("correlation_length", correlation_length)),
             seed=int(whole("seed", seed, minimum=0)),
             levels=int(whole("levels", levels)),
         )

@@ -9,8 +9,8 @@ series behind.
 from __future__ import annotations
 
 import csv
-from collections.abc import Sequence
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import quoteattr
