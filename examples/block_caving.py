@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import sys
 from dataclasses import replace
+from pathlib import Path
 
 from fdem.caving import CavingCase, run_caving
 
@@ -89,7 +90,11 @@ def main(argv: list[str] | None = None) -> dict:
     try:
         return run_caving(out, case, threads=args.threads, progress=not args.quiet, resume=args.resume)
     except KeyboardInterrupt:
-        print(f"\nstopped; the state is in {out}/caving.ckpt: add --resume to go on", file=sys.stderr)
+        ckpt = Path(out) / "caving.ckpt"
+        if ckpt.is_file():
+            print(f"\nstopped; the state is in {ckpt}: add --resume to go on", file=sys.stderr)
+        else:
+            print(f"\nstopped before the first checkpoint (no {ckpt}): run again without --resume", file=sys.stderr)
         raise SystemExit(130) from None
 
 
