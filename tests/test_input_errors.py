@@ -239,3 +239,17 @@ def test_a_damaged_model_file_is_refused_naming_it(tmp_path):
         bad.write_bytes(bytes(flipped))
         with pytest.raises(ValueError, match="bad.fdem"):
             fdem.Model.load(bad)
+
+
+def test_overlapping_triangles_that_share_no_edge_are_refused():
+    """Mesh's docstring promises a ValueError for overlapping triangles:
+    also for those that share no edge (crossing, or one inside the other),
+    naming both elements; a jointed mesh, whose two sides of a joint touch
+    along it with their own nodes, passes."""
+    crossing = [[0, 0], [1, 0], [0, 1], [0.2, 0.2], [1.2, 0.2], [0.2, 1.2]]
+    with pytest.raises(ValueError, match="elements 0 and 1 overlap"):
+        fdem.Mesh(crossing, [[0, 1, 2], [3, 4, 5]])
+    inside = [[0, 0], [4, 0], [0, 4], [1, 1], [2, 1], [1, 2]]
+    with pytest.raises(ValueError, match="overlap"):
+        fdem.Mesh(inside, [[0, 1, 2], [3, 4, 5]])
+    fdem.jointed_rectangle(10.0, 5.0, 0.5, [fdem.JointSet(90.0, 3.0, 1.0, 2.0)])

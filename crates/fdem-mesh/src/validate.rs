@@ -184,7 +184,116 @@ pub fn validate(points: &[Point], triangles: &[[u64; 3]], may_coincide: &[bool])
             }
         }
     }
+    if let Some((element, other)) = first_overlap(points, &tris) {
+        return Err(MeshError::Overlap { element, other });
+    }
     Ok(())
+}
+
+/// The first pair of elements (larger id, smaller id) whose interiors
+/// overlap although they share no edge: an edge of one properly crosses an
+/// edge of the other, or a vertex or the centroid of one lies strictly
+/// inside the other. Touching along an edge or at a vertex (conforming
+/// neighbours, the two sides of a joint) is not overlap. Candidate pairs
+/// come from a uniform grid of cells about the mean longest edge; each
+/// pair is tested once, in the cell of its bounding boxes' common lower
+/// corner. Linear in the element count for meshes of even element size.
+fn first_overlap(points: &[Point], tris: &[[u32; 3]]) -> Option<(u32, u32)> {
+    let n = tris.len();
+    if n < 2 {
+        return None;
+    }
+    let corners = |e: usize| tris[e].map(|v| points[v as usize]);
+    let mut boxes = Vec::with_capacity(n);
+    let mut sum = 0.0;
+    for e in 0..n {
+        let x = corners(e);
+        let lo = [x[0][0].min(x[1][0]).min(x[2][0]), x[0][1].min(x[1][1]).min(x[2][1])];
+        let hi = [x[0][0].max(x[1][0]).max(x[2][0]), x[0][1].max(x[1][1]).max(x[2][1])];
+        sum += (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        boxes.push((lo, hi));
+    }
+    let origin = boxes.iter().fold([f64::INFINITY; 2], |o, b| [o[0].min(b.0[0]), o[1].min(b.0[1])]);
+    // cells of about the mean box size, coarsened until no more than 32
+    // entries per element on average (a graded mesh's large elements)
+    let mut cell = (sum / n as f64).max(f64::MIN_POSITIVE);
+    // cells a box of extent x0..x1 can touch (at most)
+    let span = |x0: f64, x1: f64, c: f64| ((x1 - x0) / c).floor() + 2.0;
+    loop {
+        let total: f64 = boxes.iter().map(|(lo, hi)| span(lo[0], hi[0], cell) * span(lo[1], hi[1], cell)).sum();
+        if total <= 32.0 * n as f64 {
+            break;
+        }
+        cell *= 2.0;
+    }
+    let index = |x: f64, o: f64| ((x - o) / cell).floor().clamp(0.0, 1e15) as i64;
+    // (cell, element) for every cell an element's box touches
+    let mut entries: Vec<(i64, i64, u32)> = Vec::new();
+    for (e, (lo, hi)) in boxes.iter().enumerate() {
+        let (i0, i1) = (index(lo[0], origin[0]), index(hi[0], origin[0]));
+        let (j0, j1) = (index(lo[1], origin[1]), index(hi[1], origin[1]));
+        for i in i0..=i1 {
+            for j in j0..=j1 {
+                entries.push((i, j, e as u32));
+            }
+        }
+    }
+    entries.sort_unstable();
+    let mut found: Option<(u32, u32)> = None;
+    let mut start = 0;
+    while start < entries.len() {
+        let key = (entries[start].0, entries[start].1);
+        let mut end = start + 1;
+        while end < entries.len() && (entries[end].0, entries[end].1) == key {
+            end += 1;
+        }
+        for a in start..end {
+            for b in a + 1..end {
+                let (ea, eb) = (entries[a].2 as usize, entries[b].2 as usize);
+                let (la, lb) = (boxes[ea].0, boxes[eb].0);
+                let corner = [la[0].max(lb[0]), la[1].max(lb[1])];
+                if (index(corner[0], origin[0]), index(corner[1], origin[1])) != key {
+                    continue;
+                }
+                if interiors_overlap(&corners(ea), &corners(eb)) {
+                    let pair = (ea.max(eb) as u32, ea.min(eb) as u32);
+                    if found.is_none_or(|f| pair < f) {
+                        found = Some(pair);
+                    }
+                }
+            }
+        }
+        start = end;
+    }
+    found
+}
+
+/// Whether two counter-clockwise triangles overlap in their interiors
+/// (see [`first_overlap`]); orientation tests carry a tolerance of 1e-12
+/// of the squared size so that shared and collinear edges do not count.
+fn interiors_overlap(a: &[Point; 3], b: &[Point; 3]) -> bool {
+    let size2 =
+        a.iter().chain(b.iter()).fold(0.0f64, |m, p| m.max((p[0] - a[0][0]).powi(2) + (p[1] - a[0][1]).powi(2)));
+    let eps = 1e-12 * size2;
+    let orient = |p: Point, q: Point, r: Point| (q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1]);
+    let strictly_inside = |p: Point, t: &[Point; 3]| (0..3).all(|k| orient(t[k], t[(k + 1) % 3], p) > eps);
+    for i in 0..3 {
+        let (p, q) = (a[i], a[(i + 1) % 3]);
+        for j in 0..3 {
+            let (r, s) = (b[j], b[(j + 1) % 3]);
+            let (d1, d2) = (orient(p, q, r), orient(p, q, s));
+            let (d3, d4) = (orient(r, s, p), orient(r, s, q));
+            let crosses = |u: f64, v: f64| (u > eps && v < -eps) || (u < -eps && v > eps);
+            if crosses(d1, d2) && crosses(d3, d4) {
+                return true;
+            }
+        }
+    }
+    let centroid = |t: &[Point; 3]| [(t[0][0] + t[1][0] + t[2][0]) / 3.0, (t[0][1] + t[1][1] + t[2][1]) / 3.0];
+    a.iter().any(|&p| strictly_inside(p, b))
+        || b.iter().any(|&p| strictly_inside(p, a))
+        || strictly_inside(centroid(a), b)
+        || strictly_inside(centroid(b), a)
 }
 
 #[cfg(test)]
@@ -228,6 +337,26 @@ mod tests {
         assert_eq!(validate(&p, &t, &[]), Err(MeshError::DuplicateNode { node: 3, other: 1 }));
         let allowed = vec![false, true, true, true, false, true];
         assert_eq!(validate(&p, &t, &allowed), Ok(()));
+    }
+
+    /// Triangles that overlap without sharing an edge (crossing, one
+    /// inside the other, one poking a vertex into the other) are found;
+    /// conforming neighbours and the two sides of a joint (coincident
+    /// nodes, edges on one line) are not overlap.
+    #[test]
+    fn overlap_without_a_shared_edge() {
+        let p = vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.2, 0.2], [1.2, 0.2], [0.2, 1.2]];
+        assert!(matches!(validate(&p, &[[0, 1, 2], [3, 4, 5]], &[]), Err(MeshError::Overlap { element: 1, other: 0 })));
+        let inner = vec![[0.0, 0.0], [4.0, 0.0], [0.0, 4.0], [1.0, 1.0], [2.0, 1.0], [1.0, 2.0]];
+        assert!(matches!(validate(&inner, &[[0, 1, 2], [3, 4, 5]], &[]), Err(MeshError::Overlap { .. })));
+        let (q, t) = square();
+        assert!(validate(&q, &t, &[]).is_ok());
+        // two squares side by side along x = 1 with their own nodes there
+        let joint =
+            vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0]];
+        let tris = [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+        let coincide = [false, true, true, false, true, false, false, true];
+        assert!(validate(&joint, &tris, &coincide).is_ok());
     }
 
     #[test]
