@@ -253,3 +253,51 @@ def test_overlapping_triangles_that_share_no_edge_are_refused():
     with pytest.raises(ValueError, match="overlap"):
         fdem.Mesh(inside, [[0, 1, 2], [3, 4, 5]])
     fdem.jointed_rectangle(10.0, 5.0, 0.5, [fdem.JointSet(90.0, 3.0, 1.0, 2.0)])
+
+
+def test_a_full_disk_names_the_file_and_leaves_no_temporary(tmp_path, monkeypatch):
+    """A frame that cannot be written (the disk is full) is an OSError that
+    names the file; no ``.tmp`` file is left behind, and the frames and
+    index written before stay as they were."""
+    import errno
+
+    import meshio
+
+    sim = fdem.Simulation(_tiny_model())
+    sim.run(until=1e-4, output_every=5e-5, output=tmp_path, progress=False, checkpoint=False)
+    index = (tmp_path / "fdem.pvd").read_text()
+
+    def full(path, *args, **kwargs):
+        with open(path, "wb") as f:
+            f.write(b"partial")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(meshio, "write", full)
+    with pytest.raises(OSError, match=r"fdem_\d{5}\.vtu: could not be written"):
+        sim.run(until=3e-4, output_every=5e-5, output=tmp_path, progress=False, checkpoint=False)
+    assert not list(tmp_path.glob("*.tmp"))
+    assert (tmp_path / "fdem.pvd").read_text() == index
+
+
+def test_an_interrupted_frame_is_listed_once(tmp_path, monkeypatch):
+    """Ctrl-C while the index is being replaced: the run's handler writes
+    the state again, and the series lists that time once (it listed it
+    twice, and the duplicate survived a resume)."""
+    from fdem import output
+
+    sim = fdem.Simulation(_tiny_model())
+    sim.run(until=1e-4, output_every=5e-5, output=tmp_path, progress=False)
+    real = output.VtuSeries._write_index
+    calls = {"n": 0}
+
+    def interrupted(self):
+        calls["n"] += 1
+        real(self)
+        if calls["n"] == 1:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(output.VtuSeries, "_write_index", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        sim.run(until=3e-4, output_every=5e-5, output=tmp_path, progress=False)
+    times = [float(d.get("timestep")) for d in ET.parse(tmp_path / "fdem.pvd").getroot().iter("DataSet")]
+    assert len(times) == len(set(times))

@@ -528,14 +528,14 @@ class Model:
         import hashlib
 
         body = pickle.dumps(self, protocol=4)
-        tmp = f"{os.fspath(path)}.tmp"
-        with open(tmp, "wb") as f:
+        from .output import atomic_path
+
+        with atomic_path(path) as tmp, open(tmp, "wb") as f:
             pickle.dump(
                 {"format": _FORMAT, "version": _VERSION, "sha256": hashlib.sha256(body).hexdigest(), "body": body},
                 f,
                 protocol=4,
             )
-        os.replace(tmp, path)
 
     @staticmethod
     def load(path: str | os.PathLike[str]) -> Model:

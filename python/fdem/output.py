@@ -8,9 +8,10 @@ series behind.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import os
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import quoteattr
@@ -59,6 +60,26 @@ def cell_fields(sim: Simulation) -> dict[str, NDArray[Any]]:
     }
 
 
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[str]:
+    """A temporary path beside ``path`` to write the new file to: once the
+    ``with`` block ends it replaces ``path`` in one step (``os.replace``).
+    If the block fails or is interrupted (a full disk, Ctrl-C), the
+    temporary file is removed, ``path`` is left as it was, and an
+    ``OSError`` says which file could not be written."""
+    target = os.fspath(path)
+    tmp = target + ".tmp"
+    try:
+        yield tmp
+        os.replace(tmp, target)
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
+            os.remove(tmp)
+        if isinstance(exc, OSError) and target not in str(exc):
+            raise OSError(exc.errno, f"{target}: could not be written ({exc.strerror or exc})") from exc
+        raise
+
+
 def write_vtu(sim: Simulation, path: str | os.PathLike[str]) -> None:
     """Writes the current state as one VTU file (atomically).
 
@@ -93,11 +114,10 @@ def write_vtu(sim: Simulation, path: str | os.PathLike[str]) -> None:
         },
         cell_data=cell_data,
     )
-    tmp = path + ".tmp"
-    meshio.write(tmp, mesh, file_format="vtu")
-    with open(tmp, "rb+") as f:  # on disk before the index lists it
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        meshio.write(tmp, mesh, file_format="vtu")
+        with open(tmp, "rb+") as f:  # on disk before the index lists it
+            os.fsync(f.fileno())
 
 
 class VtuSeries:
@@ -171,7 +191,13 @@ class VtuSeries:
         wrote after it (they will be written again), rewrites the index."""
         self = cls.__new__(cls)
         self._place(state["directory"], str(state["name"]))
-        self.frames = [(float(t), str(f)) for t, f in state["frames"]]
+        frames: list[tuple[float, str]] = []
+        for t, f in state["frames"]:
+            # a frame listed twice by a run interrupted while writing it
+            # (before this was guarded) is listed once
+            if not frames or frames[-1][0] != float(t):
+                frames.append((float(t), str(f)))
+        self.frames = frames
         self.origin = None if state["origin"] is None else float(state["origin"])
         self.reactions = [str(g) for g in state.get("reactions", [])]
         kept = {f for _, f in self.frames}
@@ -194,6 +220,16 @@ class VtuSeries:
         """Writes the current state as the next frame and updates the index
         and the energy history (``energies``: ``sim.energies()``, if the
         caller has it already)."""
+        if self.frames and self.frames[-1][0] == sim.time:
+            # the same state again (a write interrupted by Ctrl-C and taken
+            # up by the run's handler): replace that frame, list it once
+            fname = self.frames[-1][1]
+            write_vtu(sim, self.directory / fname)
+            self._write_index()
+            if self._history_step != sim.steps:
+                self._append_energy(sim, sim.energies() if energies is None else energies)
+                self._append_reactions(sim)
+            return self.directory / fname
         k = len(self.frames)
         fname = f"{self.name}_{k:05d}.vtu"
         write_vtu(sim, self.directory / fname)
@@ -220,14 +256,16 @@ class VtuSeries:
         for t, f in self.frames:
             lines.append(f'    <DataSet timestep="{t:.9g}" group="" part="0" file={quoteattr(f)}/>')
         lines += ["  </Collection>", "</VTKFile>", ""]
-        tmp = self.index.with_suffix(".pvd.tmp")
-        with open(tmp, "w") as f:
+        with atomic_path(self.index) as tmp, open(tmp, "w") as f:
             f.write("\n".join(lines))
             f.flush()
             os.fsync(f.fileno())
-        os.replace(tmp, self.index)
+
+    #: The step of the last energy row written (None: none yet this session).
+    _history_step: int | None = None
 
     def _append_energy(self, sim: Simulation, e: dict[str, float]) -> None:
+        self._history_step = sim.steps
         rel = abs(e["residual"]) / e["largest_term"] if e["largest_term"] > 0 else 0.0
         row = {"time": sim.time, "step": sim.steps, **e, "relative_residual": rel}
         new = self._energy_keys is None
@@ -274,8 +312,6 @@ def _truncate_history(path: Path, step: int) -> list[str] | None:
     head, body = rows[0], rows[1:]
     col = head.index("step")
     body = [r for r in body if len(r) == len(head) and int(float(r[col])) <= step]
-    tmp = path.with_suffix(".csv.tmp")
-    with open(tmp, "w", newline="") as f:
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         csv.writer(f).writerows([head, *body])
-    os.replace(tmp, path)
     return head
