@@ -361,6 +361,7 @@ class Mesh:
         nx, ny = whole("nx", nx, maximum=100_000), whole("ny", ny, maximum=100_000)
         if pattern not in ("alternating", "right", "left"):
             raise ValueError(f"pattern must be 'alternating', 'right' or 'left', got {pattern!r}")
+        origin = tuple(float_array("origin", origin, (2,)).tolist())
         xs = origin[0] + w * np.arange(nx + 1) / nx
         ys = origin[1] + h * np.arange(ny + 1) / ny
         gx, gy = np.meshgrid(xs, ys)
@@ -422,9 +423,11 @@ class Mesh:
         s = positive("size", size)
         # the node count the refinement heads for, known before it starts:
         # about A / (√3/4 s²) / 2 nodes for the polygon's area A
-        x, y = pts[:, 0], pts[:, 1]
-        area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
-        expected = area / (np.sqrt(3) / 4 * s * s) / 2
+        # in units of the size, so that huge coordinates do not overflow
+        x, y = (pts[:, 0] - pts[0, 0]) / s, (pts[:, 1] - pts[0, 1]) / s
+        cells = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+        area = cells * s * s
+        expected = cells / (np.sqrt(3) / 4) / 2
         if not expected <= max_nodes:
             raise ValueError(
                 f"size = {s:g} m would mesh the polygon (area {area:.3g} m²) with about {expected:.3g} nodes, "
@@ -442,7 +445,8 @@ class Mesh:
         its circle a polygon of sides about ``size`` long (see
         :meth:`polygon`). The facet set ``boundary`` holds the rim."""
         r, s = positive("radius", radius), positive("size", size)
-        expected = np.pi * r * r / (np.sqrt(3) / 4 * s * s) / 2
+        ratio = r / s  # (r/s)², not r²/s², which overflows first
+        expected = np.pi * ratio * ratio / (np.sqrt(3) / 4) / 2
         if not expected <= 2_000_000:
             raise ValueError(
                 f"size = {s:g} m would mesh a disc of radius {r:g} m with about {expected:.3g} nodes "
@@ -578,7 +582,7 @@ def gmsh_rectangle(
     except ImportError as exc:  # pragma: no cover - depends on the environment
         raise ImportError("gmsh_rectangle needs gmsh: pip install 'fdem[gmsh]'") from exc
     w, h, s = positive("width", width), positive("height", height), positive("size", size)
-    x0, y0 = float(origin[0]), float(origin[1])
+    x0, y0 = float_array("origin", origin, (2,)).tolist()
     gmsh.initialize(interruptible=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
