@@ -91,7 +91,9 @@ class JointSet:
         ymax)``, shape (k, 2, 2)."""
         x0, y0, x1, y1 = (float(v) for v in bounds)
         if not all(math.isfinite(v) for v in (x0, y0, x1, y1)) or not (x0 < x1 and y0 < y1):
-            raise ValueError(f"joint set '{self.name}': bounds {bounds} must be finite with xmin < xmax and ymin < ymax")
+            raise ValueError(
+                f"joint set '{self.name}': bounds {bounds} must be finite with xmin < xmax and ymin < ymax"
+            )
         a = math.radians(self.angle)
         d = np.array([math.cos(a), math.sin(a)])
         n = np.array([-math.sin(a), math.cos(a)])
