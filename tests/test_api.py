@@ -256,3 +256,34 @@ def test_hilbert_key_walks_a_grid_one_neighbour_at_a_time():
     assert sorted(key.tolist()) == list(range(256))
     path = cells[np.argsort(key)]
     assert np.all(np.abs(np.diff(path, axis=0)).sum(axis=1) == 1.0)
+
+
+def test_frames_carry_principal_stresses_fragments_and_leave_out_excavated_cells(tmp_path):
+    """Issue 36 (5): a frame has σ1 ≥ σ2 ≥ σ3 (σzz among them) and the
+    in-plane principal direction, checked on a uniform stress rotated by
+    30° (σ = R diag(−1, −4) Rᵀ MPa, σzz = ν(σxx + σyy)); the fragment of
+    each cell; the failure factor capped at 1 beside its raw value; and no
+    excavated cell."""
+    mesh = fdem.Mesh.rectangle(2.0, 1.0, 4, 2)
+    model = fdem.Model(mesh, material=fdem.Elastic(E=30e9, nu=0.25, rho=2700.0))
+    c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
+    a, b = -1e6, -4e6
+    sxx, syy, sxy = a * c * c + b * s * s, a * s * s + b * c * c, (a - b) * s * c
+    model.set_initial_stress((sxx, syy, 0.25 * (sxx + syy), sxy))
+    left = np.flatnonzero(mesh.centroids()[:, 0] < 0.5)
+    model.excavate(left, at=0.0)
+    sim = fdem.Simulation(model)
+    sim.run(until=sim.time_step, output_every=sim.time_step, output=tmp_path, progress=False)
+    start = meshio.read(tmp_path / "fdem_00000.vtu")  # the initial state, whole
+    p1, p2, p3 = (start.cell_data[f"principal_stress_{k}"][0] for k in (1, 2, 3))
+    expected = sorted([a, b, 0.25 * (a + b)], reverse=True)
+    for k in range(mesh.n_elements):
+        assert [p1[k], p2[k], p3[k]] == pytest.approx(expected, rel=1e-9)
+    assert np.allclose(start.cell_data["principal_direction"][0], 30.0, atol=1e-6)
+    m = meshio.read(sorted(tmp_path.glob("fdem_*.vtu"))[-1])
+    n = int(sim.active().sum())
+    assert len(start.cells_dict["triangle"]) == mesh.n_elements
+    assert len(m.cells_dict["triangle"]) == n < mesh.n_elements
+    assert np.array_equal(m.cell_data["fragment"][0], sim.fragment_labels()[sim.active()])
+    assert np.all(m.cell_data["failure_factor"][0] <= 1.0)
+    assert "failure_factor_raw" in m.cell_data

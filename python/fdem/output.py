@@ -45,11 +45,21 @@ def cell_fields(sim: Simulation) -> dict[str, NDArray[Any]]:
     """The element fields written to each frame."""
     stress = sim.stress()
     state = sim.element_state()
+    principal = principal_stresses(stress)
     return {
         "stress": stress,
-        "principal_stress_1": principal_stresses(stress)[:, 0],
+        "principal_stress_1": principal[:, 0],
+        "principal_stress_2": principal[:, 1],
+        "principal_stress_3": principal[:, 2],
+        # the in-plane direction of the larger in-plane principal stress,
+        # degrees from x in (−90, 90]
+        "principal_direction": np.degrees(0.5 * np.arctan2(2 * stress[:, 3], stress[:, 0] - stress[:, 1])),
         "active": sim.active().astype(np.uint8),
-        "failure_factor": state["failure_factor"],
+        "fragment": sim.fragment_labels(),
+        # κ H / f_t reaches 1 when the band has softened through; beyond it
+        # only the raw value says more (how far past)
+        "failure_factor": np.minimum(state["failure_factor"], 1.0),
+        "failure_factor_raw": state["failure_factor"],
         "plastic_strain": state["equivalent_plastic_strain"],
         "plastic_strain_tensor": state["plastic_strain"],
         "fracturing_strain": state["kappa"],
@@ -92,10 +102,12 @@ def write_vtu(sim: Simulation, path: str | os.PathLike[str]) -> None:
 
     path = os.fspath(path)
     x = sim.positions()
-    tri = sim.triangles()
+    # excavated elements are left out: they are no longer part of the model
+    keep = sim.active()
+    tri = sim.triangles()[keep]
     facets, laws = sim.surface_facets()
     lines = facets[laws > 0]
-    cells = cell_fields(sim)
+    cells = {k: np.asarray(v)[keep] for k, v in cell_fields(sim).items()}
     blocks: list[tuple[str, NDArray[Any]]] = [("triangle", tri)]
     cell_data: dict[str, list[NDArray[Any]]] = {k: [np.asarray(v)] for k, v in cells.items()}
     cell_data["interface"] = [np.full(len(tri), -1, dtype=np.int32)]

@@ -16,6 +16,9 @@ __all__ = ["plot_field"]
 
 _LABELS = {
     "principal_stress_1": ("first principal stress σ1", "MPa", 1e-6),
+    "principal_stress_2": ("second principal stress σ2", "MPa", 1e-6),
+    "principal_stress_3": ("third principal stress σ3", "MPa", 1e-6),
+    "principal_direction": ("direction of the larger in-plane principal stress", "degrees", 1.0),
     "stress_xx": ("σxx", "MPa", 1e-6),
     "stress_yy": ("σyy", "MPa", 1e-6),
     "stress_zz": ("σzz", "MPa", 1e-6),
