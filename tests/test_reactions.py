@@ -87,3 +87,28 @@ def test_a_resumed_run_continues_its_reaction_history_bit_for_bit(tmp_path):
     again = fdem.Simulation.from_checkpoint(tmp_path / "mid.ckpt", model, threads=2)
     again.run(until=0.04, output_every=0.005, output=tmp_path, progress=False)
     assert (tmp_path / "fdem_reactions.csv").read_text() == whole
+
+
+def test_probes_record_the_stress_at_a_point_and_a_groups_motion(tmp_path):
+    """Issue 36 (3): named probes at every frame, to ``{name}_probes.csv``
+    and by ``Simulation.probe``: the stress at the specimen's centre is the
+    uniaxial plane-strain state σyy = −E'ε, σxx = 0 (within 0.5% and 0.5%
+    of σyy), the top group moves with the platen; a void point reads NaN;
+    a bad probe is named before anything is written."""
+    model = compression_specimen(ROCK, width=1.0, height=2.0, cells=(8, 16), strain_rate=0.01)
+    sim = fdem.Simulation(model, threads=1)
+    probes = {"centre": (0.5, 1.0), "top": "top", "outside": (5.0, 5.0)}
+    sim.run(until=0.05, output_every=0.01, output=tmp_path, probes=probes, progress=False)
+    with open(tmp_path / "fdem_probes.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 6
+    last = rows[-1]
+    strain = -float(last["top_displacement_y"]) / 2.0
+    syy = float(last["centre_stress_yy"])
+    assert syy == pytest.approx(-ROCK.E / (1 - ROCK.nu**2) * strain, rel=5e-3)
+    assert abs(float(last["centre_stress_xx"])) < 5e-3 * abs(syy)
+    assert np.isnan(float(last["outside_stress_xx"]))
+    assert sim.probe("top")["displacement"][1] == pytest.approx(float(last["top_displacement_y"]), rel=1e-12)
+    assert sim.probe((0.5, 1.0))["stress"][1] == float(last["centre_stress_yy"])
+    with pytest.raises(ValueError, match="nowhere"):
+        fdem.Simulation(model).run(until=1e-4, output=tmp_path / "x", probes={"p": "nowhere"}, progress=False)

@@ -162,9 +162,11 @@ class VtuSeries:
         *,
         overwrite: bool = False,
         reactions: Sequence[str] = (),
+        probes: dict[str, Any] | None = None,
     ) -> None:
         self._place(directory, name)
         self.reactions = list(reactions)
+        self.probes = dict(probes or {})
         if self.index.exists() and not overwrite:
             raise FileExistsError(f"{self.index} already exists; pass overwrite=True or choose another output name")
         for old in self.directory.glob(f"{name}_[0-9][0-9][0-9][0-9][0-9].vtu"):
@@ -174,7 +176,7 @@ class VtuSeries:
         #: Simulated time of the first frame: output times are ``origin + k
         #: output_every``, also after a restart.
         self.origin: float | None = None
-        for old_csv in (self.energy_csv, self.reactions_csv):
+        for old_csv in (self.energy_csv, self.reactions_csv, self.probes_csv):
             if old_csv.exists():
                 old_csv.unlink()
 
@@ -185,6 +187,7 @@ class VtuSeries:
         self.index = self.directory / f"{name}.pvd"
         self.energy_csv = self.directory / f"{name}_energy.csv"
         self.reactions_csv = self.directory / f"{name}_reactions.csv"
+        self.probes_csv = self.directory / f"{name}_probes.csv"
 
     def state(self) -> dict[str, Any]:
         """What a checkpoint keeps of the series to continue it."""
@@ -194,6 +197,7 @@ class VtuSeries:
             "frames": [[t, f] for t, f in self.frames],
             "origin": self.origin,
             "reactions": self.reactions,
+            "probes": self.probes,
         }
 
     @classmethod
@@ -212,6 +216,7 @@ class VtuSeries:
         self.frames = frames
         self.origin = None if state["origin"] is None else float(state["origin"])
         self.reactions = [str(g) for g in state.get("reactions", [])]
+        self.probes = dict(state.get("probes", {}))
         kept = {f for _, f in self.frames}
         # refuse before deleting anything
         missing = [f for f in kept if not (self.directory / f).exists()]
@@ -226,6 +231,7 @@ class VtuSeries:
         self._write_index()
         self._energy_keys = _truncate_history(self.energy_csv, step)
         _truncate_history(self.reactions_csv, step)
+        _truncate_history(self.probes_csv, step)
         return self
 
     def write(self, sim: Simulation, energies: dict[str, float] | None = None) -> Path:
@@ -241,6 +247,7 @@ class VtuSeries:
             if self._history_step != sim.steps:
                 self._append_energy(sim, sim.energies() if energies is None else energies)
                 self._append_reactions(sim)
+                self._append_probes(sim)
             return self.directory / fname
         k = len(self.frames)
         fname = f"{self.name}_{k:05d}.vtu"
@@ -251,6 +258,7 @@ class VtuSeries:
         self._write_index()
         self._append_energy(sim, sim.energies() if energies is None else energies)
         self._append_reactions(sim)
+        self._append_probes(sim)
         return self.directory / fname
 
     def record_energy(self, sim: Simulation, energies: dict[str, float] | None = None) -> None:
@@ -258,6 +266,7 @@ class VtuSeries:
         frame (``energies``: ``sim.energies()``, if the caller has it)."""
         self._append_energy(sim, sim.energies() if energies is None else energies)
         self._append_reactions(sim)
+        self._append_probes(sim)
 
     def _write_index(self) -> None:
         lines = [
@@ -291,6 +300,17 @@ class VtuSeries:
             f.flush()
             os.fsync(f.fileno())
 
+    def _append_probes(self, sim: Simulation) -> None:
+        if not self.probes:
+            return
+        head, row = ["time", "step"], [sim.time, float(sim.steps)]
+        for name, where in self.probes.items():
+            for key, values in sim.probe(where).items():
+                parts = ("xx", "yy", "zz", "xy") if key == "stress" else ("x", "y")
+                head += [f"{name}_{key}_{p}" for p in parts]
+                row += np.asarray(values, dtype=float).tolist()
+        _append_row(self.probes_csv, head, row)
+
     def _append_reactions(self, sim: Simulation) -> None:
         if not self.reactions:
             return
@@ -309,6 +329,18 @@ class VtuSeries:
             w.writerow(row)
             f.flush()
             os.fsync(f.fileno())
+
+
+def _append_row(path: Path, head: list[str], row: list[float]) -> None:
+    """Appends a row to a history CSV, with its header if the file is new."""
+    new = not path.exists()
+    with open(path, "a", newline="") as f:
+        w = csv.writer(f)
+        if new:
+            w.writerow(head)
+        w.writerow(row)
+        f.flush()
+        os.fsync(f.fileno())
 
 
 def _truncate_history(path: Path, step: int) -> list[str] | None:

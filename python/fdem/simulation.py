@@ -308,6 +308,24 @@ class Simulation:
         u = self.displacements()[mask]
         return {"force": -r.sum(axis=0), "displacement": u.mean(axis=0), "nodes": int(mask.sum())}
 
+    def probe(self, where: Any) -> dict[str, NDArray[np.float64]]:
+        """The state at a probe now. ``where`` is a point ``(x, y)`` (m, in
+        the current configuration): ``{"stress": [xx, yy, zz, xy]}`` (Pa)
+        of the element holding it, NaN in a void; or a node group (a group
+        name or node ids of the model, with the copies crack insertion
+        made of them): ``{"displacement": (2,), "velocity": (2,)}``, means
+        over its nodes (m, m/s)."""
+        if _is_point(where):
+            from .caving_stress import probe_stress
+
+            return {"stress": probe_stress(self, [[float(where[0]), float(where[1])]])[0]}
+        ids = self.model.mesh.nodes(where)
+        mask = np.isin(self._core.node_origins(), ids)
+        return {
+            "displacement": self.displacements()[mask].mean(axis=0),
+            "velocity": self.velocities()[mask].mean(axis=0),
+        }
+
     def stress(self) -> NDArray[np.float64]:
         """Cauchy stress per element ``[xx, yy, zz, xy]`` (Pa, tension positive)."""
         return self._core.stress()
@@ -734,6 +752,7 @@ class Simulation:
         stop_on_energy_error: bool = False,
         final_frame: bool = True,
         reactions: Sequence[str] = (),
+        probes: dict[str, Any] | None = None,
     ) -> Simulation:
         """Advances to simulated time ``until`` (s), writing a frame every
         ``output_every`` seconds into the directory ``output``.
@@ -771,6 +790,12 @@ class Simulation:
             and energy row into ``{output}/{name}_reactions.csv``: the
             load–displacement history of a platen or a support. Fixed when
             the series starts; a resumed series keeps its groups.
+        probes : dict, optional
+            Named probes (:meth:`probe`: a point ``(x, y)`` as floats, or a
+            node group) whose state goes into ``{output}/{name}_probes.csv``
+            at every frame and energy row: the stress at a point, the mean
+            displacement and velocity of a group. Fixed when the series
+            starts, like ``reactions``.
 
         Ctrl-C stops the run within a second at a step boundary, after
         writing the current state as a frame and the checkpoint, and raises
@@ -805,7 +830,10 @@ class Simulation:
                     reactions = [reactions] if isinstance(reactions, str) else list(reactions)
                     for group in reactions:
                         self.model.mesh.nodes(group)  # an unknown group is named before anything is written
-                    self._series[key] = VtuSeries(output, name, overwrite=overwrite, reactions=reactions)
+                    probe_specs = {str(k): _probe_spec(self, k, v) for k, v in (probes or {}).items()}
+                    self._series[key] = VtuSeries(
+                        output, name, overwrite=overwrite, reactions=reactions, probes=probe_specs
+                    )
                     self._series[key].write(self)
             series = self._series[key]
         origin = series.origin if series is not None and series.origin is not None else self.time
@@ -915,3 +943,24 @@ def _fingerprint(arrays: dict[str, Any]) -> str:
 
     feed(arrays)
     return h.hexdigest()
+
+
+def _is_point(where: Any) -> bool:
+    """Whether a probe is a point ``(x, y)`` rather than a node group."""
+    if isinstance(where, str):
+        return False
+    a = np.asarray(where)
+    return a.shape == (2,) and a.dtype.kind == "f"
+
+
+def _probe_spec(sim: Simulation, name: Any, where: Any) -> Any:
+    """A probe in a form a checkpoint can keep (JSON): a point as two
+    floats, a group name, or node ids; checked now, so that a bad one is
+    named before anything is written."""
+    if _is_point(where):
+        x, y = (float(v) for v in where)
+        if not (math.isfinite(x) and math.isfinite(y)):
+            raise ValueError(f"probe {name!r}: point {where!r} must be finite")
+        return [x, y]
+    ids = sim.model.mesh.nodes(where)
+    return where if isinstance(where, str) else [int(i) for i in ids]
