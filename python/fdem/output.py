@@ -277,10 +277,10 @@ class VtuSeries:
         for t, f in self.frames:
             lines.append(f'    <DataSet timestep="{t:.9g}" group="" part="0" file={quoteattr(f)}/>')
         lines += ["  </Collection>", "</VTKFile>", ""]
-        with atomic_path(self.index) as tmp, open(tmp, "w") as f:
-            f.write("\n".join(lines))
-            f.flush()
-            os.fsync(f.fileno())
+        with atomic_path(self.index) as tmp, open(tmp, "w") as out:
+            out.write("\n".join(lines))
+            out.flush()
+            os.fsync(out.fileno())
 
     #: The step of the last energy row written (None: none yet this session).
     _history_step: int | None = None
