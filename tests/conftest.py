@@ -52,3 +52,14 @@ def assembled_critical_step(mesh: fdem.Mesh, mat: fdem.Elastic, scale: np.ndarra
 @pytest.fixture
 def rock() -> fdem.Elastic:
     return ROCK
+
+
+@pytest.fixture(scope="session")
+def quick_caving(tmp_path_factory):
+    """The README's demo (`fdem demo`): the quick caving case, run once for
+    every module that reads it (tests/test_caving.py, test_caving_metrics.py)."""
+    from fdem.demos import run_demo
+
+    out = tmp_path_factory.mktemp("caving")
+    summary = run_demo(out, quick=True, progress=False)
+    return out, summary

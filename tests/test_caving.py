@@ -165,16 +165,6 @@ def test_jointed_block_at_rest_stays_at_rest_when_plasticity_and_fracture_start(
     assert abs(e["residual"]) < 0.01 * held
 
 
-@pytest.fixture(scope="module")
-def quick_caving(tmp_path_factory):
-    """The README's demo (`fdem demo`): the quick caving case."""
-    from fdem.demos import run_demo
-
-    out = tmp_path_factory.mktemp("caving")
-    summary = run_demo(out, quick=True, progress=False)
-    return out, summary
-
-
 def test_quick_caving_runs_undercuts_in_order_and_caves(quick_caving):
     """Issue 6 (5): the quick case runs, undercuts stage by stage in the
     scheduled order, and caves: rock falls below the undercut level."""

@@ -16,6 +16,10 @@ everything into one directory:
 - ``table2.csv``, ``table2.md`` and ``table2.png``: the paper's Table 2
   beside ours at the end (3.5 s), and ours over time
   (:mod:`fdem.caving_stress`);
+- ``metrics.csv``, ``metrics.png`` and ``subsidence.csv``: cave back
+  height, angles of break, subsidence, yielded area and fragment sizes
+  over time (:mod:`fdem.caving_metrics`), and the top face's subsidence
+  profile at the end;
 - ``abutment.csv``, ``abutment_profile.csv`` and ``abutment.png``: the
   vertical stress across the abutments at the probes' depth against the
   lithostatic value, and its peak beside each undercut edge over time;
@@ -37,6 +41,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .caving_metrics import caving_metrics, subsidence_profile
 from .caving_stress import (
     ABUTMENT_LINE,
     FRAMES,
@@ -407,6 +412,7 @@ def run_caving(
     mirror = points * np.array([-1.0, 1.0])
     lithostatic = -(TOP_PRESSURE + UNIT_WEIGHT * (TOP - ABUTMENT_LINE))
     book.setdefault("abutment", [])
+    book.setdefault("metrics", [])
     sample = min(0.05, case.output_every)
     figures: list[str] = book["figures"]
     run0 = _time.perf_counter()
@@ -490,6 +496,16 @@ def run_caving(
             book["probes"].extend(rows)
             peaks = abutment_peaks(sim, width=WIDTH, undercut=case.undercut, size=case.size, lithostatic=lithostatic)
             book["abutment"].append([sim.time, sim.stages_done, *peaks.values()])
+            metrics = caving_metrics(
+                sim,
+                width=WIDTH,
+                bottom=BOTTOM,
+                top=TOP,
+                support=case.support,
+                undercut=case.undercut,
+                size=case.size,
+            )
+            book["metrics"].append([sim.time, sim.stages_done, *metrics.values()])
             book["samples"] += 1
             book["sampled"] = t
             mark()
@@ -513,6 +529,7 @@ def run_caving(
     plot_field(sim, "velocity", fig5, title=f"Fractured, caving rock at t = {sim.time:.2f} s (speed)")
     figures.append(fig5.name)
     abutment = _write_stress_tables(out, sim, case, probe_rows, book["abutment"], points, lithostatic)
+    final_metrics = _write_metrics(out, sim, book["metrics"])
     frags = sim.fragments()
     with open(out / "fragments.csv", "w", newline="") as f:
         w = csv.writer(f)
@@ -553,6 +570,7 @@ def run_caving(
         "energy_residual_J": e["residual"],
         "energy_supplied_J": supplied,
         **abutment,
+        **final_metrics,
         **rest,
         # the contact's assembly runs beside the element pass on more than
         # one thread: their clocks overlap
@@ -667,6 +685,65 @@ def _trim(book: dict[str, Any]) -> None:
     counted (it is taken again)."""
     del book["probes"][book["samples"] * len(PAPER_PROBES) :]
     del book.setdefault("abutment", [])[book["samples"] :]
+    del book.setdefault("metrics", [])[book["samples"] :]
+
+
+_METRIC_KEYS = (
+    "cave_back_m",
+    "angle_of_break_left_deg",
+    "angle_of_break_right_deg",
+    "subsidence_max_m",
+    "yielded_area_m2",
+    "fragments_free",
+    "p20_m",
+    "p50_m",
+    "p80_m",
+)
+
+
+def _write_metrics(out: Path, sim: Simulation, rows: list[list[float]]) -> dict[str, float]:
+    """Writes ``metrics.csv`` (the caving metrics at every sample),
+    ``metrics.png`` (cave back height and yielded area against time) and
+    ``subsidence.csv`` (the top face's settlement against x at the end);
+    returns the last sample's metrics for the summary."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    with open(out / "metrics.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["time_s", "stages_done", *_METRIC_KEYS])
+        w.writerows(rows)
+    x0, x = sim.reference_positions(), sim.positions()
+    top = np.flatnonzero(np.abs(x0[:, 1] - TOP) < 1e-6 * abs(TOP))
+    edges = np.arange(-0.5 * WIDTH, 0.5 * WIDTH + 1e-9, 5.0)
+    profile = subsidence_profile(x0[top, 0], x0[top, 1] - x[top, 1], edges)
+    with open(out / "subsidence.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["x_from_m", "x_to_m", "settlement_m"])
+        w.writerows(zip(edges[:-1], edges[1:], profile, strict=True))
+    if not rows:
+        return {}
+    data = np.array(rows, dtype=float)
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.5), dpi=110)
+    ax[0].plot(data[:, 0], data[:, 2], label="cave back above the undercut level")
+    ax[0].set_xlabel("time (s)")
+    ax[0].set_ylabel("height (m)")
+    ax[0].grid(alpha=0.3)
+    twin = ax[0].twinx()
+    twin.plot(data[:, 0], data[:, 1] * 20.0, "k:", lw=1, label="undercut width")
+    twin.set_ylabel("undercut width (m)")
+    ax[0].set_title("Cave back over the midline (solid) and undercut (dotted)")
+    ax[1].plot(data[:, 0], data[:, 6] / 1e3, label="yielded area")
+    ax[1].set_xlabel("time (s)")
+    ax[1].set_ylabel("yielded or fractured area (10³ m²)")
+    ax[1].grid(alpha=0.3)
+    ax[1].set_title("Rock that has flowed or fractured")
+    fig.tight_layout()
+    fig.savefig(out / "metrics.png")
+    plt.close(fig)
+    return {f"metric_{k}": float(v) for k, v in zip(_METRIC_KEYS, rows[-1][2:], strict=True)}
 
 
 def _write_stress_tables(
