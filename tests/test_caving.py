@@ -411,3 +411,60 @@ def test_overburden_as_the_caps_weight_loads_the_block_as_the_pressure_does():
         CavingCase(overburden="rock")
     with pytest.raises(ValueError, match="cap"):
         CavingCase(overburden="mass", cap=0.0)
+
+
+def test_a_case_round_trips_through_json_and_names_bad_fields(tmp_path):
+    """Issue 35 (2): every field, custom joint sets included, survives
+    save and load; an unknown field, a value of the wrong type, a bad joint
+    set or schedule is a ValueError naming the field and the file."""
+    from dataclasses import replace
+
+    case = replace(
+        CavingCase.quick(),
+        joints=(fdem.JointSet(60.0, 20.0, 5.0, 8.0, jitter=0.5, seed=3, name="inclined"),),
+        schedule="one-sided",
+        k0=1.0,
+        mass_scaling=None,
+    )
+    case.save(tmp_path / "case.json")
+    assert CavingCase.load(tmp_path / "case.json") == case
+    for text, word in (
+        ('{"size": "big"}', "size must be a finite number"),
+        ('{"sizes": 1}', "unknown field 'sizes'"),
+        ('{"joints": [{"angle": 0, "persistence": -1, "bridge": 1, "spacing": 1}]}', r"joints\[0\]"),
+        ('{"schedule": "left"}', "schedule"),
+        ('{"check_every": 2.5}', "check_every"),
+        ("[1, 2]", "JSON object"),
+    ):
+        (tmp_path / "bad.json").write_text(text)
+        with pytest.raises(ValueError, match=word) as err:
+            CavingCase.load(tmp_path / "bad.json")
+        assert "bad.json" in str(err.value)
+
+
+def test_custom_joint_sets_and_a_one_sided_undercut_build_the_model():
+    """Issue 35 (2): joint sets of the case are the mesh's (an inclined set
+    meshes, its faces at 60° within 1°); the one-sided schedule removes
+    the support from the undercut's left edge rightwards, 2 step per
+    stage, the same total as the symmetric one."""
+    from dataclasses import replace
+
+    case = replace(
+        CavingCase.quick(),
+        joints=(fdem.JointSet(60.0, 40.0, 10.0, 12.0, name="inclined"),),
+        schedule="one-sided",
+    )
+    model = caving_model(case)
+    faces = model.mesh.points[model.mesh.facet_sets["inclined"]]
+    d = faces[:, 1] - faces[:, 0]
+    angles = np.degrees(np.arctan2(d[:, 1], d[:, 0])) % 180.0
+    assert len(faces) > 0 and np.all(np.abs(angles - 60.0) < 1.0)
+    c = model.mesh.centroids()
+    stages = [model.mesh.elements(f"undercut_{k}") for k in range(1, 9)]
+    for k, ids in enumerate(stages, start=1):
+        x = c[ids, 0]
+        assert x.min() > -80.0 - 4.0 and x.max() < -80.0 + 20.0 * k + 4.0
+    symmetric = caving_model(CavingCase.quick())
+    total = sum(len(model.mesh.elements(f"undercut_{k}")) for k in range(1, 9))
+    total_sym = sum(len(symmetric.mesh.elements(f"undercut_{k}")) for k in range(1, 9))
+    assert abs(total - total_sym) <= 0.05 * total_sym

@@ -31,6 +31,7 @@ everything into one directory:
 from __future__ import annotations
 
 import csv
+import json
 import math
 import os
 import time as _time
@@ -62,11 +63,14 @@ from .model import Model
 from .plot import plot_field
 from .simulation import Simulation
 
-__all__ = ["CavingCase", "caving_model", "run_caving", "probe_stress", "PAPER_PROBES"]
+__all__ = ["CavingCase", "caving_model", "run_caving", "probe_stress", "PAPER_PROBES", "paper_joint_sets"]
 
 # Table 2 of the paper: node, x (m), y (m) at 3.5 s, in the paper's frame
 # (fdem.caving_stress has its stresses and the frames)
 PAPER_PROBES: tuple[tuple[str, float, float], ...] = tuple((n, x, y) for n, x, y, *_ in PAPER_TABLE2)
+
+#: The ways the undercut can advance (:class:`CavingCase`).
+SCHEDULES = ("symmetric", "one-sided")
 
 #: The ways the overburden can load the block (:class:`CavingCase`).
 OVERBURDEN = ("pressure", "mass")
@@ -169,7 +173,17 @@ class CavingCase:
     geostatic state below the cap.
     ``k0`` is the ratio of horizontal to vertical in-situ stress; ``None``
     (the default) takes ν/(1 − ν) = 1/3, the state of no lateral strain
-    (DESIGN §4.6): the paper gives no ratio."""
+    (DESIGN §4.6): the paper gives no ratio.
+    ``joints`` replaces the paper's two joint sets (their spacings times
+    ``joint_scale``) by the sets given (:class:`fdem.JointSet`, with
+    orientation, persistence, bridge, spacing and a seeded jitter); inclined
+    sets mesh conformingly like the paper's (docs/meshing.md).
+    ``schedule`` is how the undercut advances: ``"symmetric"`` (the paper:
+    ``step`` m each way from the midline per stage) or ``"one-sided"``
+    (from the left edge of the undercut rightwards, ``2 step`` m per stage:
+    the same area per stage). The case round-trips through JSON
+    (:meth:`to_json`, :meth:`from_json`, :meth:`save`, :meth:`load`),
+    which names the field of any bad value."""
 
     size: float = 1.0
     joint_scale: float = 1.0
@@ -191,12 +205,22 @@ class CavingCase:
     probe_frame: str = "left"
     overburden: str = "mass"
     k0: float | None = None
+    joints: tuple[JointSet, ...] | None = None
+    schedule: str = "symmetric"
 
     def __post_init__(self) -> None:
         if self.probe_frame not in FRAMES:
             raise ValueError(f"CavingCase.probe_frame must be one of {FRAMES}, not {self.probe_frame!r}")
         if self.overburden not in OVERBURDEN:
             raise ValueError(f"CavingCase.overburden must be one of {OVERBURDEN}, not {self.overburden!r}")
+        if self.schedule not in SCHEDULES:
+            raise ValueError(f"CavingCase.schedule must be one of {SCHEDULES}, not {self.schedule!r}")
+        if self.joints is not None:
+            sets = tuple(self.joints)
+            for i, j in enumerate(sets):
+                if not isinstance(j, JointSet):
+                    raise ValueError(f"CavingCase.joints[{i}] must be a fdem.JointSet, got {type(j).__name__}")
+            object.__setattr__(self, "joints", sets)
         if self.overburden == "mass" and not self.cap > 0:
             raise ValueError(f"CavingCase.overburden = 'mass' needs a cap layer to carry it; cap = {self.cap}")
 
@@ -207,6 +231,46 @@ class CavingCase:
         (about 15 s on 2 cores, 3 395 elements at the start)."""
         return CavingCase(size=4.0, joint_scale=4.0, support=5.0, until=0.8, interval=0.06, output_every=0.2)
 
+    def to_json(self) -> str:
+        """The case as JSON (every field; joint sets as objects)."""
+        import json
+
+        return json.dumps(asdict(self), indent=2, sort_keys=True)
+
+    @classmethod
+    def from_json(cls, text: str, source: str = "case") -> CavingCase:
+        """A case from :meth:`to_json`'s JSON (fields left out take their
+        defaults). An unknown field, or a value of the wrong type or out of
+        range, is a ValueError that names the field (and ``source``)."""
+        import json
+        from dataclasses import fields
+
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"{source}: not JSON ({exc})") from None
+        if not isinstance(data, dict):
+            raise ValueError(f"{source}: a caving case is a JSON object of fields")
+        known = {f.name: f for f in fields(cls)}
+        values: dict[str, Any] = {}
+        for key, value in data.items():
+            if key not in known:
+                raise ValueError(f"{source}: unknown field {key!r} (known: {', '.join(sorted(known))})")
+            values[key] = _case_value(source, key, value, getattr(cls(), key))
+        try:
+            return cls(**values)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{source}: {exc}") from None
+
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Writes the case as JSON (:meth:`to_json`)."""
+        Path(path).write_text(self.to_json() + "\n")
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> CavingCase:
+        """Reads a case written by :meth:`save` (or by hand)."""
+        return cls.from_json(Path(path).read_text(), source=os.fspath(path))
+
     def figure_times(self) -> list[float]:
         """The times (s) of the Fig. 4-like pictures: the start, the third
         undercut stage, half the run and its end, each once (rounded to the
@@ -214,6 +278,54 @@ class CavingCase:
         picture)."""
         times = (0.0, self.start + self.interval * 3, self.until / 2, self.until)
         return sorted({round(t, 6) for t in times})
+
+
+def paper_joint_sets(scale: float = 1.0) -> list[JointSet]:
+    """The paper's joint sets (§3.1): vertical 60 m × 30 m × 2 m and
+    horizontal 30 m × 15 m × 3 m (persistence × bridge × spacing), their
+    spacings times ``scale``."""
+    return [
+        JointSet(90.0, 60.0, 30.0, 2.0 * scale, name="vertical"),
+        JointSet(0.0, 30.0, 15.0, 3.0 * scale, name="horizontal"),
+    ]
+
+
+def _case_value(source: str, key: str, value: Any, default: Any) -> Any:
+    """A JSON value for field ``key`` of a case, checked against the type of
+    its default; a mismatch names the field."""
+    if key == "joints":
+        if value is None:
+            return None
+        if not isinstance(value, list):
+            raise ValueError(f"{source}: joints must be a list of joint sets, got {value!r}")
+        out = []
+        for i, item in enumerate(value):
+            if not isinstance(item, dict):
+                raise ValueError(f"{source}: joints[{i}] must be an object, got {item!r}")
+            try:
+                out.append(JointSet(**item))
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"{source}: joints[{i}]: {exc}") from None
+        return tuple(out)
+    if value is None and key in ("mass_scaling", "renumber", "k0"):
+        return None
+    if isinstance(default, bool) or key == "uniform_mesh":
+        if not isinstance(value, bool):
+            raise ValueError(f"{source}: {key} must be true or false, got {value!r}")
+        return value
+    if isinstance(default, str):
+        if not isinstance(value, str):
+            raise ValueError(f"{source}: {key} must be a string, got {value!r}")
+        return value
+    if isinstance(default, int) and key == "check_every":
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{source}: {key} must be a whole number >= 1, got {value!r}")
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"{source}: {key} must be a finite number, got {value!r}")
+    if value < 0 or (value == 0 and key not in ("start", "cap", "k0")):
+        raise ValueError(f"{source}: {key} = {value!r} must be positive")
+    return float(value)
 
 
 def caving_model(case: CavingCase | None = None) -> Model:
@@ -227,10 +339,7 @@ def caving_model(case: CavingCase | None = None) -> Model:
     ``rock``, and ``undercut_k`` for
     stage k = 1, 2, … (the support elements first removed by that stage)."""
     case = case or CavingCase()
-    sets = [
-        JointSet(90.0, 60.0, 30.0, 2.0 * case.joint_scale, name="vertical"),
-        JointSet(0.0, 30.0, 15.0, 3.0 * case.joint_scale, name="horizontal"),
-    ]
+    sets = list(case.joints) if case.joints is not None else paper_joint_sets(case.joint_scale)
     mesh = jointed_rectangle(WIDTH, HEIGHT, case.size, sets, origin=(-WIDTH / 2, BOTTOM), uniform=case.uniform_mesh)
     c = mesh.centroids()
     support = np.flatnonzero(c[:, 1] < BOTTOM + case.support)
@@ -240,7 +349,12 @@ def caving_model(case: CavingCase | None = None) -> Model:
     stages = int(round(case.undercut / (2 * case.step)))
     done = np.zeros(mesh.n_elements, dtype=bool)
     for k in range(1, stages + 1):
-        ids = support[(np.abs(c[support, 0]) < k * case.step) & ~done[support]]
+        if case.schedule == "symmetric":
+            reach = np.abs(c[support, 0]) < k * case.step
+        else:
+            left = -0.5 * case.undercut
+            reach = (c[support, 0] > left) & (c[support, 0] < left + 2 * k * case.step)
+        ids = support[reach & ~done[support]]
         done[ids] = True
         element_sets[f"undercut_{k}"] = ids
     mesh = mesh.with_sets(element_sets=element_sets)
@@ -663,7 +777,8 @@ def _resumed(ckpt: Path, model: Model, case: CavingCase, threads: int | None) ->
     # a field the checkpoint does not name (added since) had the value that
     # reproduces the runs made before it: its default, or what the default
     # was then (the uniform mesh became the default after the field came)
-    saved, mine = book["case"], asdict(case)
+    # as the checkpoint keeps it (JSON: tuples become lists)
+    saved, mine = book["case"], json.loads(json.dumps(asdict(case)))
     default = {**asdict(CavingCase()), **_BEFORE_FIELD}
     differ = [
         f"{k} = {mine[k]!r} (the run: {saved.get(k, default[k])!r})"
