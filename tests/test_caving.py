@@ -8,7 +8,7 @@ import csv
 import fdem
 import numpy as np
 import pytest
-from fdem.caving import BOTTOM, PAPER_PROBES, CavingCase, area_below, caving_model, strip_means
+from fdem.caving import BOTTOM, PAPER_PROBES, CavingCase, area_below, caving_model, run_caving, strip_means
 
 ROCK = fdem.Elastic(E=60e9, nu=0.25, rho=3100.0)
 
@@ -468,3 +468,36 @@ def test_custom_joint_sets_and_a_one_sided_undercut_build_the_model():
     total = sum(len(model.mesh.elements(f"undercut_{k}")) for k in range(1, 9))
     total_sym = sum(len(symmetric.mesh.elements(f"undercut_{k}")) for k in range(1, 9))
     assert abs(total - total_sym) <= 0.05 * total_sym
+
+
+def test_run_caving_takes_a_model_the_user_changed(tmp_path):
+    """Issue 35 (2): a user's own model (here the quick case with stronger
+    joints and an undercut of the left half only, as extra stages built by
+    hand) goes through run_caving with its probes, metrics, figures and
+    summary; its own stages run."""
+    from dataclasses import replace
+
+    case = replace(CavingCase.quick(), until=0.2, output_every=0.1)
+    mesh = caving_model(case).mesh
+    c = mesh.centroids()
+    support = mesh.elements("support")
+    left = support[c[support, 0] < 0.0]
+    model = fdem.Model(
+        mesh,
+        materials={
+            "rock": fdem.MohrCoulombRankine(E=60e9, nu=0.25, rho=3100.0, c=8e6, phi=55.0, psi=9.0, ft=1e6, Gf=70.0),
+            "support": fdem.Elastic(E=60e9, nu=0.25, rho=3100.0),
+            "cap": fdem.Elastic(E=60e9, nu=0.25, rho=3100.0),
+        },
+    ).set_gravity(0.0, -9.81)
+    model.fix("left", x=True, y=False).fix("right", x=True, y=False).fix("bottom")
+    model.pressure("top", 15.2e6).set_geostatic_stress(top=-434.0, pressure=15.2e6)
+    model.contact(fdem.Interface(damping=0.5), interfaces={"joints": fdem.Interface(friction=40.0, damping=0.5)})
+    model.fracture(insert_at=1.0, min_size=0.6, check_every=6)
+    model.excavate(left, at=0.05)
+    summary = run_caving(tmp_path, case, model=model, threads=2, progress=False)
+    assert summary["undercut_stages"] == 1
+    for name in ("probes.csv", "table2.csv", "metrics.csv", "abutment.csv", "summary.txt"):
+        assert (tmp_path / name).exists(), name
+    with pytest.raises(ValueError, match="fdem.Model"):
+        run_caving(tmp_path / "x", case, model="not a model", progress=False)

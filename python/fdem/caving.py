@@ -485,9 +485,17 @@ def run_caving(
     threads: int | None = None,
     progress: bool = True,
     resume: bool = False,
+    model: Model | None = None,
 ) -> dict[str, Any]:
     """Builds, equilibrates and runs the caving case, writing all results
     into ``out`` (see the module docstring); returns the summary as a dict.
+
+    ``model`` runs a model the user built or changed instead of
+    :func:`caving_model` of ``case`` (the same 200 m × 100 m block in the
+    same place: the probes, abutment line and metrics read it there; its
+    own materials, joints, loads and excavation stages); ``case`` still
+    gives the run's times, sizes for the metrics and output. A resume
+    needs the same model again.
 
     The run keeps ``out/caving.ckpt`` up to date after every 0.05 s of
     simulated time, at every frame, on Ctrl-C and after a failure (then the
@@ -512,7 +520,10 @@ def run_caving(
     out.mkdir(parents=True, exist_ok=True)
     ckpt = out / "caving.ckpt"
     wall0 = _time.perf_counter()
-    model = caving_model(case)
+    if model is None:
+        model = caving_model(case)
+    elif not isinstance(model, Model):
+        raise ValueError(f"model must be a fdem.Model, got {type(model).__name__}")
     if resume:
         sim = _resumed(ckpt, model, case, threads)
         book = sim.user_data["caving"]
@@ -723,7 +734,7 @@ def _started(
     # strips below the cap's lowest corner (its elements are whole rows,
     # so its underside is ragged; with the overburden as its weight the
     # cap's own stress is not the lithostatic one of the rock)
-    cap = model.mesh.elements("cap")
+    cap = model.mesh.elements("cap") if "cap" in model.mesh.group_names() else np.zeros(0, dtype=np.int64)
     below_cap = float(model.mesh.points[model.mesh.triangles[cap], 1].min()) if len(cap) else TOP
     edges = np.arange(BOTTOM + case.support, below_cap + 1e-9, 5.0)
     active = sim.active()
