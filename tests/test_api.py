@@ -287,3 +287,29 @@ def test_frames_carry_principal_stresses_fragments_and_leave_out_excavated_cells
     assert np.array_equal(m.cell_data["fragment"][0], sim.fragment_labels()[sim.active()])
     assert np.all(m.cell_data["failure_factor"][0] <= 1.0)
     assert "failure_factor_raw" in m.cell_data
+
+
+def test_interface_faces_carry_their_tractions_and_a_legend(tmp_path):
+    """Issue 36 (5): a 1 m × 0.5 m block resting on a base under gravity:
+    the normal tractions of the interface faces, times their lengths, add
+    up to the block's weight (within 1%: the contact forces of both sides'
+    nodes, each on the face it presses); the frame names its interface
+    laws in its field data."""
+    top = fdem.Mesh.rectangle(1.0, 0.5, 4, 2, origin=(0.0, 0.5))
+    base = fdem.Mesh.rectangle(2.0, 0.5, 8, 2, origin=(-0.5, 0.0))
+    mesh = fdem.Mesh.combine(top, base, prefixes=["top_", "base_"])
+    rock = fdem.Elastic(E=1e9, nu=0.25, rho=2000.0)
+    model = fdem.Model(mesh, material=rock).set_gravity(0.0, -10.0)
+    model.fix("base_bottom").contact(fdem.Interface(friction=30.0, damping=0.5))
+    sim = fdem.Simulation(model)
+    sim.equilibrate(max_velocity=1e-5, progress=False)
+    fdem.output.write_vtu(sim, tmp_path / "rest.vtu")
+    m = meshio.read(tmp_path / "rest.vtu")
+    # the contact is on free surfaces (law 0), not written as line cells:
+    # read the tractions of every surface face
+    faces = sim.surface_facets()[0]
+    tr = fdem.output.interface_tractions(sim, faces)
+    x = sim.positions()
+    length = np.linalg.norm(x[faces[:, 1]] - x[faces[:, 0]], axis=1)
+    assert np.sum(tr["normal_traction"] * length) == pytest.approx(2000.0 * 10.0 * 0.5, rel=0.01)
+    assert "interface_0_default" in m.field_data and "interface_1_cracks" in m.field_data

@@ -70,6 +70,69 @@ def cell_fields(sim: Simulation) -> dict[str, NDArray[Any]]:
     }
 
 
+def interface_tractions(sim: Simulation, lines: NDArray[np.int64]) -> dict[str, NDArray[Any]]:
+    """Per interface face (``lines``, node pairs): the normal and shear
+    tractions (Pa: the contact forces of the nodes pressing on the face
+    over its length, compression positive) and whether any of them slips
+    (1) — for the line cells of a frame."""
+    n = len(lines)
+    normal, shear, slip = np.zeros(n), np.zeros(n), np.zeros(n, dtype=np.uint8)
+    if n == 0:
+        return {"normal_traction": normal, "shear_traction": shear, "slipping": slip}
+    c = sim.contacts()
+    if len(c["node"]):
+        key = {(int(min(a, b)), int(max(a, b))): i for i, (a, b) in enumerate(lines.tolist())}
+        for (a, b), fn, ft, sl in zip(
+            c["facet"].tolist(), c["normal_force"], c["tangential_force"], c["slipping"], strict=True
+        ):
+            i = key.get((min(a, b), max(a, b)))
+            if i is not None:
+                normal[i] += float(fn)
+                shear[i] += float(ft)
+                slip[i] |= bool(sl)
+        x = sim.positions()
+        length = np.linalg.norm(x[lines[:, 1]] - x[lines[:, 0]], axis=1)
+        normal /= np.maximum(length, 1e-300)
+        shear /= np.maximum(length, 1e-300)
+    return {"normal_traction": normal, "shear_traction": shear, "slipping": slip}
+
+
+def _interface_legend(sim: Simulation) -> dict[str, NDArray[Any]]:
+    """The meaning of the ``interface`` index of line cells, as field data
+    (``interface_<k>_<name>``: ``[k, 1]``): 0 free surface, the named
+    interfaces, the cracks."""
+    contact = getattr(sim.model, "_contact", None)
+    if not contact:
+        return {}
+    names = {0: "default"}
+    names.update({k: name for name, k in contact["named"].items()})
+    names[contact["crack"]] = "cracks"
+    return {f"interface_{k}_{v}": np.array([k, 1]) for k, v in sorted(names.items())}
+
+
+def _add_field_data(path: str, values: dict[str, NDArray[Any]]) -> None:
+    """Adds ``values`` as the VTU file's FieldData (meshio's writer leaves
+    it out): integer arrays, written as ASCII right after the
+    ``<UnstructuredGrid>`` tag, which ParaView and meshio read."""
+    if not values:
+        return
+    with open(path, "rb") as f:
+        text = f.read()
+    tag = b"<UnstructuredGrid>"
+    at = text.find(tag)
+    if at < 0:
+        return
+    arrays = "".join(
+        f'<DataArray type="Int64" Name={quoteattr(k)} NumberOfTuples="{len(v)}" format="ascii">'
+        + " ".join(str(int(x)) for x in v)
+        + "</DataArray>"
+        for k, v in values.items()
+    )
+    text = text[: at + len(tag)] + f"<FieldData>{arrays}</FieldData>".encode() + text[at + len(tag) :]
+    with open(path, "wb") as f:
+        f.write(text)
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[str]:
     """A temporary path beside ``path`` to write the new file to: once the
@@ -117,6 +180,9 @@ def write_vtu(sim: Simulation, path: str | os.PathLike[str]) -> None:
             value = np.asarray(value)
             cell_data[key].append(np.zeros((len(lines),) + value.shape[1:], dtype=value.dtype))
         cell_data["interface"].append(laws[laws > 0].astype(np.int32))
+    tractions = interface_tractions(sim, lines)
+    for key, value in tractions.items():
+        cell_data[key] = [np.zeros(len(tri), dtype=value.dtype)] + ([value] if len(lines) else [])
     mesh = meshio.Mesh(
         _pad3(x),
         blocks,
@@ -128,6 +194,7 @@ def write_vtu(sim: Simulation, path: str | os.PathLike[str]) -> None:
     )
     with atomic_path(path) as tmp:
         meshio.write(tmp, mesh, file_format="vtu")
+        _add_field_data(tmp, _interface_legend(sim))
         with open(tmp, "rb+") as f:  # on disk before the index lists it
             os.fsync(f.fileno())
 
