@@ -78,3 +78,22 @@ def test_the_quick_run_writes_its_metrics(quick_caving):
     assert np.all(np.diff(back) > -4.0)
     assert summary["metric_cave_back_m"] == back[-1]
     assert (out / "metrics.png").stat().st_size > 10_000 and (out / "subsidence.csv").exists()
+
+
+def test_energy_partition_and_the_stage_table(quick_caving):
+    """The energy shares of the quick run add up, with what the metrics do
+    not list (elastic energy, excavation, mass scaling, contact springs,
+    the residual), to the energy supplied: the listed ones lie in [0, 1]
+    and sum to at most 1 + 2% (the balance tolerance); stages.csv has one
+    row per undercut stage, the width growing 20 m per stage."""
+    out, _ = quick_caving
+    with open(out / "metrics.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    keys = ("energy_kinetic", "energy_plastic", "energy_fracture", "energy_friction", "energy_damping")
+    last = [float(rows[-1][k]) for k in keys]
+    assert all(0.0 <= v <= 1.0 for v in last) and sum(last) <= 1.02
+    assert float(rows[-1]["energy_kinetic"]) > 0.05
+    with open(out / "stages.csv", newline="") as f:
+        stages = list(csv.DictReader(f))
+    assert [int(r["stage"]) for r in stages] == list(range(1, 9))
+    assert [float(r["undercut_width_m"]) for r in stages] == [20.0 * k for k in range(1, 9)]

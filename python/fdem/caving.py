@@ -654,7 +654,7 @@ def run_caving(
     plot_field(sim, "velocity", fig5, title=f"Fractured, caving rock at t = {sim.time:.2f} s (speed)")
     figures.append(fig5.name)
     abutment = _write_stress_tables(out, sim, case, probe_rows, book["abutment"], points, lithostatic)
-    final_metrics = _write_metrics(out, sim, book["metrics"])
+    final_metrics = _write_metrics(out, sim, book["metrics"], case)
     frags = sim.fragments()
     with open(out / "fragments.csv", "w", newline="") as f:
         w = csv.writer(f)
@@ -824,11 +824,18 @@ _METRIC_KEYS = (
     "p20_m",
     "p50_m",
     "p80_m",
+    "energy_kinetic",
+    "energy_plastic",
+    "energy_fracture",
+    "energy_friction",
+    "energy_damping",
 )
 
 
-def _write_metrics(out: Path, sim: Simulation, rows: list[list[float]]) -> dict[str, float]:
+def _write_metrics(out: Path, sim: Simulation, rows: list[list[float]], case: CavingCase) -> dict[str, float]:
     """Writes ``metrics.csv`` (the caving metrics at every sample),
+    ``stages.csv`` (the metrics at the first sample after each undercut
+    stage, against the undercut's width),
     ``metrics.png`` (cave back height and yielded area against time) and
     ``subsidence.csv`` (the top face's settlement against x at the end);
     returns the last sample's metrics for the summary."""
@@ -841,6 +848,12 @@ def _write_metrics(out: Path, sim: Simulation, rows: list[list[float]]) -> dict[
         w = csv.writer(f)
         w.writerow(["time_s", "stages_done", *_METRIC_KEYS])
         w.writerows(rows)
+    with open(out / "stages.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["stage", "undercut_width_m", "time_s", *_METRIC_KEYS])
+        for k in sorted({int(r[1]) for r in rows if r[1] > 0}):
+            first = next(r for r in rows if int(r[1]) == k)
+            w.writerow([k, 2 * case.step * k, first[0], *first[2:]])
     x0, x = sim.reference_positions(), sim.positions()
     top = np.flatnonzero(np.abs(x0[:, 1] - TOP) < 1e-6 * abs(TOP))
     edges = np.arange(-0.5 * WIDTH, 0.5 * WIDTH + 1e-9, 5.0)

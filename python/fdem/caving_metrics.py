@@ -20,6 +20,9 @@ docs/caving.md, "Caving metrics").
   the sizes P20, P50 and P80 that 20, 50 and 80% of the fragmented area
   passes, leaving out the fragments that touch a side wall (the intact
   abutments).
+- **Energy partition**: the shares of the energy supplied since
+  equilibrium held as kinetic energy and dissipated by plastic flow,
+  fracture, friction and damping.
 """
 
 from __future__ import annotations
@@ -168,6 +171,9 @@ def caving_metrics(
     walled = np.unique(labels[wall[tri[act]].any(axis=1)])
     keep = np.setdiff1d(np.arange(len(fragment_area)), walled)
     p20, p50, p80 = passing_sizes(fragment_area[keep])
+    e = sim.energies()
+    supplied = abs(e["external_work"]) + abs(e["support_work"]) + e["kinetic_initial"] + e["elastic_initial"]
+    share = (lambda v: v / supplied) if supplied > 0 else (lambda v: 0.0)
     return {
         "cave_back_m": back,
         "angle_of_break_left_deg": left,
@@ -178,4 +184,11 @@ def caving_metrics(
         "p20_m": p20,
         "p50_m": p50,
         "p80_m": p80,
+        # the energy partition: where the energy supplied since equilibrium
+        # (work of gravity, loads and supports, and the initial state) went
+        "energy_kinetic": share(e["kinetic"]),
+        "energy_plastic": share(e["plastic"]),
+        "energy_fracture": share(e["fracture"]),
+        "energy_friction": share(e["friction"]),
+        "energy_damping": share(e["contact_damping"] + e["mass_damping"] + e["viscous_damping"]),
     }
