@@ -425,6 +425,9 @@ def test_a_case_round_trips_through_json_and_names_bad_fields(tmp_path):
         schedule="one-sided",
         k0=1.0,
         mass_scaling=None,
+        rock=fdem.MohrCoulombRankine(E=30e9, nu=0.2, rho=2700.0, c=5e6, phi=40.0, psi=5.0, ft=2e6, Gf=50.0),
+        joint_law=fdem.Interface(friction=25.0, cohesion=1e4, damping=0.5),
+        top_pressure=5e6,
     )
     case.save(tmp_path / "case.json")
     assert CavingCase.load(tmp_path / "case.json") == case
@@ -434,6 +437,8 @@ def test_a_case_round_trips_through_json_and_names_bad_fields(tmp_path):
         ('{"joints": [{"angle": 0, "persistence": -1, "bridge": 1, "spacing": 1}]}', r"joints\[0\]"),
         ('{"schedule": "left"}', "schedule"),
         ('{"check_every": 2.5}', "check_every"),
+        ('{"rock": {"E": -1}}', "rock"),
+        ('{"top_pressure": -1}', "top_pressure"),
         ("[1, 2]", "JSON object"),
     ):
         (tmp_path / "bad.json").write_text(text)
@@ -501,3 +506,23 @@ def test_run_caving_takes_a_model_the_user_changed(tmp_path):
         assert (tmp_path / name).exists(), name
     with pytest.raises(ValueError, match="fdem.Model"):
         run_caving(tmp_path / "x", case, model="not a model", progress=False)
+
+
+def test_the_case_sets_the_rock_joints_and_top_load_of_the_model():
+    """Issue 35 (2): a case's rock, joint law and top pressure are the
+    model's: the geostatic σyy under the cap is −(p + γ depth) with the
+    case's p and the rock's unit weight (γ = 30.41 kN/m³ × ρ/3100), to
+    1e-12."""
+    from dataclasses import replace
+
+    from fdem.caving import TOP
+
+    rock = fdem.MohrCoulombRankine(E=30e9, nu=0.2, rho=2700.0, c=5e6, phi=40.0, psi=5.0, ft=2e6, Gf=50.0)
+    case = replace(CavingCase.quick(), rock=rock, top_pressure=5e6, overburden="pressure")
+    model = caving_model(case)
+    rock_ids = model.mesh.elements("rock")
+    assert all(model._materials[model._element_material[e]] is rock for e in rock_ids[:10])
+    y = model.mesh.centroids()[rock_ids, 1]
+    gamma = 30.41e3 * 2700.0 / 3100.0
+    syy = model.kernel_arrays()["initial_stress"][rock_ids, 1]
+    assert np.allclose(syy, -(5e6 + gamma * (TOP - y)), rtol=1e-12)

@@ -181,7 +181,10 @@ class CavingCase:
     ``schedule`` is how the undercut advances: ``"symmetric"`` (the paper:
     ``step`` m each way from the midline per stage) or ``"one-sided"``
     (from the left edge of the undercut rightwards, ``2 step`` m per stage:
-    the same area per stage). The case round-trips through JSON
+    the same area per stage). ``rock`` (default: Table 1's), ``joint_law``
+    and ``crack_law`` (default: 33°, 50 kPa and 33°, both with ξ = 0.5)
+    and ``top_pressure`` (Pa, 15.2 MPa) replace the paper's materials and
+    load; gravity stays 30.41 kN/m³ over 3100 kg/m³. The case round-trips through JSON
     (:meth:`to_json`, :meth:`from_json`, :meth:`save`, :meth:`load`),
     which names the field of any bad value."""
 
@@ -207,6 +210,10 @@ class CavingCase:
     k0: float | None = None
     joints: tuple[JointSet, ...] | None = None
     schedule: str = "symmetric"
+    rock: MohrCoulombRankine | None = None
+    joint_law: Interface | None = None
+    crack_law: Interface | None = None
+    top_pressure: float = TOP_PRESSURE
 
     def __post_init__(self) -> None:
         if self.probe_frame not in FRAMES:
@@ -221,6 +228,14 @@ class CavingCase:
                 if not isinstance(j, JointSet):
                     raise ValueError(f"CavingCase.joints[{i}] must be a fdem.JointSet, got {type(j).__name__}")
             object.__setattr__(self, "joints", sets)
+        if self.rock is not None and not isinstance(self.rock, MohrCoulombRankine):
+            raise ValueError(f"CavingCase.rock must be a fdem.MohrCoulombRankine, got {type(self.rock).__name__}")
+        for name in ("joint_law", "crack_law"):
+            law = getattr(self, name)
+            if law is not None and not isinstance(law, Interface):
+                raise ValueError(f"CavingCase.{name} must be a fdem.Interface, got {type(law).__name__}")
+        if not (math.isfinite(self.top_pressure) and self.top_pressure >= 0):
+            raise ValueError(f"CavingCase.top_pressure = {self.top_pressure} must be a finite pressure >= 0 (Pa)")
         if self.overburden == "mass" and not self.cap > 0:
             raise ValueError(f"CavingCase.overburden = 'mass' needs a cap layer to carry it; cap = {self.cap}")
 
@@ -280,6 +295,12 @@ class CavingCase:
         return sorted({round(t, 6) for t in times})
 
 
+def _unit_weight(case: CavingCase) -> float:
+    """The rock's unit weight (N/m³): 30.41 kN/m³ for Table 1's rock,
+    in proportion to the density of another."""
+    return UNIT_WEIGHT if case.rock is None else UNIT_WEIGHT * case.rock.rho / ROCK.rho
+
+
 def paper_joint_sets(scale: float = 1.0) -> list[JointSet]:
     """The paper's joint sets (§3.1): vertical 60 m × 30 m × 2 m and
     horizontal 30 m × 15 m × 3 m (persistence × bridge × spacing), their
@@ -307,8 +328,16 @@ def _case_value(source: str, key: str, value: Any, default: Any) -> Any:
             except (TypeError, ValueError) as exc:
                 raise ValueError(f"{source}: joints[{i}]: {exc}") from None
         return tuple(out)
-    if value is None and key in ("mass_scaling", "renumber", "k0"):
+    if value is None and key in ("mass_scaling", "renumber", "k0", "rock", "joint_law", "crack_law"):
         return None
+    if key in ("rock", "joint_law", "crack_law"):
+        kind = MohrCoulombRankine if key == "rock" else Interface
+        if not isinstance(value, dict):
+            raise ValueError(f"{source}: {key} must be an object of {kind.__name__} fields, got {value!r}")
+        try:
+            return kind(**value)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{source}: {key}: {exc}") from None
     if isinstance(default, bool) or key == "uniform_mesh":
         if not isinstance(value, bool):
             raise ValueError(f"{source}: {key} must be true or false, got {value!r}")
@@ -323,7 +352,7 @@ def _case_value(source: str, key: str, value: Any, default: Any) -> Any:
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ValueError(f"{source}: {key} must be a finite number, got {value!r}")
-    if value < 0 or (value == 0 and key not in ("start", "cap", "k0")):
+    if value < 0 or (value == 0 and key not in ("start", "cap", "k0", "top_pressure")):
         raise ValueError(f"{source}: {key} = {value!r} must be positive")
     return float(value)
 
@@ -359,22 +388,25 @@ def caving_model(case: CavingCase | None = None) -> Model:
         element_sets[f"undercut_{k}"] = ids
     mesh = mesh.with_sets(element_sets=element_sets)
     g = UNIT_WEIGHT / ROCK.rho
+    rock, p = case.rock or ROCK, case.top_pressure
     # the overburden as the cap's weight: p W = (ρ' − ρ) g A, with A the
     # area of the elements that make the cap (whole rows: 4 m of a 5 m cap
     # on the quick mesh)
     cap_area = float(mesh.areas()[cap].sum())
-    rho_cap = ROCK.rho + (TOP_PRESSURE * WIDTH / (g * cap_area) if case.overburden == "mass" else 0.0)
-    elastic = Elastic(E=ROCK.E, nu=ROCK.nu, rho=rho_cap)
-    model = Model(mesh, materials={"rock": ROCK, "support": ROCK, "cap": elastic}).set_gravity(0.0, -g)
+    rho_cap = rock.rho + (p * WIDTH / (g * cap_area) if case.overburden == "mass" else 0.0)
+    elastic = Elastic(E=rock.E, nu=rock.nu, rho=rho_cap)
+    model = Model(mesh, materials={"rock": rock, "support": rock, "cap": elastic}).set_gravity(0.0, -g)
     model.fix("left", x=True, y=False).fix("right", x=True, y=False).fix("bottom")
-    model.set_geostatic_stress(top=TOP, pressure=TOP_PRESSURE, k0=case.k0)
+    model.set_geostatic_stress(top=TOP, pressure=p, k0=case.k0)
     if case.overburden == "pressure":
-        model.pressure("top", TOP_PRESSURE)
+        model.pressure("top", p)
     else:
         # the heavy cap's own lithostatic state; below it the same as
         # with the pressure
         model.set_geostatic_stress(top=TOP, pressure=0.0, k0=case.k0, where="cap")
-    model.contact(Interface(damping=0.5), interfaces={"joints": JOINTS}, cracks=CRACKS)
+    model.contact(
+        Interface(damping=0.5), interfaces={"joints": case.joint_law or JOINTS}, cracks=case.crack_law or CRACKS
+    )
     model.fracture(insert_at=case.insert_at, min_size=case.min_size, check_every=case.check_every)
     for k in range(1, stages + 1):
         model.excavate(f"undercut_{k}", at=case.start + (k - 1) * case.interval)
@@ -535,7 +567,7 @@ def run_caving(
     figure_times = case.figure_times()
     points = probe_points(case.probe_frame, WIDTH)
     mirror = points * np.array([-1.0, 1.0])
-    lithostatic = -(TOP_PRESSURE + UNIT_WEIGHT * (TOP - ABUTMENT_LINE))
+    lithostatic = -(case.top_pressure + _unit_weight(case) * (TOP - ABUTMENT_LINE))
     book.setdefault("abutment", [])
     book.setdefault("metrics", [])
     sample = min(0.05, case.output_every)
@@ -739,7 +771,7 @@ def _started(
     edges = np.arange(BOTTOM + case.support, below_cap + 1e-9, 5.0)
     active = sim.active()
     mean_syy, _ = strip_means(sim.positions()[sim.triangles()[active]], sim.stress()[active, 1], edges)
-    syy_lith = -(TOP_PRESSURE + UNIT_WEIGHT * (TOP - 0.5 * (edges[1:] + edges[:-1])))
+    syy_lith = -(case.top_pressure + _unit_weight(case) * (TOP - 0.5 * (edges[1:] + edges[:-1])))
     rest["lithostatic_error"] = float(np.max(np.abs(mean_syy / syy_lith - 1)))
     if progress:
         print(
