@@ -526,3 +526,24 @@ def test_the_case_sets_the_rock_joints_and_top_load_of_the_model():
     gamma = 30.41e3 * 2700.0 / 3100.0
     syy = model.kernel_arrays()["initial_stress"][rock_ids, 1]
     assert np.allclose(syy, -(5e6 + gamma * (TOP - y)), rtol=1e-12)
+
+
+def test_an_undercut_schedule_of_any_regions_and_times():
+    """Issue 35 (2): stages given as (time, x_from, x_to) remove the
+    support standing in each strip at its time, in the order given; a
+    stage with nothing left to remove, or a bad stage, is named."""
+    from dataclasses import replace
+
+    regions = ((0.05, 40.0, 80.0), (0.2, -80.0, -40.0), (0.3, -40.0, 40.0))
+    case = replace(CavingCase.quick(), regions=regions)
+    model = caving_model(case)
+    c = model.mesh.centroids()
+    for k, (_, x0, x1) in enumerate(regions, start=1):
+        x = c[model.mesh.elements(f"undercut_{k}"), 0]
+        assert len(x) and x.min() >= x0 and x.max() < x1
+    assert [t for t, _ in model.stages] == [0.05, 0.2, 0.3]
+    assert CavingCase.from_json(case.to_json()) == case
+    with pytest.raises(ValueError, match="stage 2"):
+        caving_model(replace(case, regions=((0.05, -80.0, 80.0), (0.1, 0.0, 10.0))))
+    with pytest.raises(ValueError, match=r"regions\[0\]"):
+        replace(case, regions=((0.05, 10.0, 0.0),))

@@ -184,7 +184,11 @@ class CavingCase:
     the same area per stage). ``rock`` (default: Table 1's), ``joint_law``
     and ``crack_law`` (default: 33°, 50 kPa and 33°, both with ξ = 0.5)
     and ``top_pressure`` (Pa, 15.2 MPa) replace the paper's materials and
-    load; gravity stays 30.41 kN/m³ over 3100 kg/m³. The case round-trips through JSON
+    load; gravity stays 30.41 kN/m³ over 3100 kg/m³. ``regions`` replaces
+    the schedule by any sequence of stages ``(time s, x_from m, x_to m)``:
+    each removes the support still standing with centroids in
+    ``[x_from, x_to)`` at its time (``undercut`` still names the undercut's
+    full width, whose edges the abutment and metrics read). The case round-trips through JSON
     (:meth:`to_json`, :meth:`from_json`, :meth:`save`, :meth:`load`),
     which names the field of any bad value."""
 
@@ -214,6 +218,7 @@ class CavingCase:
     joint_law: Interface | None = None
     crack_law: Interface | None = None
     top_pressure: float = TOP_PRESSURE
+    regions: tuple[tuple[float, float, float], ...] | None = None
 
     def __post_init__(self) -> None:
         if self.probe_frame not in FRAMES:
@@ -228,6 +233,14 @@ class CavingCase:
                 if not isinstance(j, JointSet):
                     raise ValueError(f"CavingCase.joints[{i}] must be a fdem.JointSet, got {type(j).__name__}")
             object.__setattr__(self, "joints", sets)
+        if self.regions is not None:
+            regions = tuple(tuple(float(v) for v in r) for r in self.regions)
+            for i, r in enumerate(regions):
+                if len(r) != 3 or not all(math.isfinite(v) for v in r) or r[0] < 0 or not r[1] < r[2]:
+                    raise ValueError(
+                        f"CavingCase.regions[{i}] = {r} must be (time >= 0, x_from, x_to) with x_from < x_to"
+                    )
+            object.__setattr__(self, "regions", regions)
         if self.rock is not None and not isinstance(self.rock, MohrCoulombRankine):
             raise ValueError(f"CavingCase.rock must be a fdem.MohrCoulombRankine, got {type(self.rock).__name__}")
         for name in ("joint_law", "crack_law"):
@@ -328,8 +341,12 @@ def _case_value(source: str, key: str, value: Any, default: Any) -> Any:
             except (TypeError, ValueError) as exc:
                 raise ValueError(f"{source}: joints[{i}]: {exc}") from None
         return tuple(out)
-    if value is None and key in ("mass_scaling", "renumber", "k0", "rock", "joint_law", "crack_law"):
+    if value is None and key in ("mass_scaling", "renumber", "k0", "rock", "joint_law", "crack_law", "regions"):
         return None
+    if key == "regions":
+        if not isinstance(value, list) or not all(isinstance(r, list) for r in value):
+            raise ValueError(f"{source}: regions must be a list of [time, x_from, x_to], got {value!r}")
+        return tuple(tuple(r) for r in value)
     if key in ("rock", "joint_law", "crack_law"):
         kind = MohrCoulombRankine if key == "rock" else Interface
         if not isinstance(value, dict):
@@ -375,17 +392,26 @@ def caving_model(case: CavingCase | None = None) -> Model:
     cap = np.flatnonzero(c[:, 1] > TOP - case.cap)
     rock = np.setdiff1d(np.arange(mesh.n_elements), np.union1d(support, cap))
     element_sets: dict[str, Any] = {"support": support, "rock": rock, "cap": cap}
-    stages = int(round(case.undercut / (2 * case.step)))
+    stages = len(case.regions) if case.regions is not None else int(round(case.undercut / (2 * case.step)))
+    times = []
     done = np.zeros(mesh.n_elements, dtype=bool)
     for k in range(1, stages + 1):
-        if case.schedule == "symmetric":
+        if case.regions is not None:
+            at, x_from, x_to = case.regions[k - 1]
+            reach = (c[support, 0] >= x_from) & (c[support, 0] < x_to)
+        elif case.schedule == "symmetric":
+            at = case.start + (k - 1) * case.interval
             reach = np.abs(c[support, 0]) < k * case.step
         else:
+            at = case.start + (k - 1) * case.interval
             left = -0.5 * case.undercut
             reach = (c[support, 0] > left) & (c[support, 0] < left + 2 * k * case.step)
         ids = support[reach & ~done[support]]
+        if len(ids) == 0:
+            raise ValueError(f"CavingCase: undercut stage {k} removes no support element (nothing left in its reach)")
         done[ids] = True
         element_sets[f"undercut_{k}"] = ids
+        times.append(at)
     mesh = mesh.with_sets(element_sets=element_sets)
     g = UNIT_WEIGHT / ROCK.rho
     rock, p = case.rock or ROCK, case.top_pressure
@@ -408,8 +434,8 @@ def caving_model(case: CavingCase | None = None) -> Model:
         Interface(damping=0.5), interfaces={"joints": case.joint_law or JOINTS}, cracks=case.crack_law or CRACKS
     )
     model.fracture(insert_at=case.insert_at, min_size=case.min_size, check_every=case.check_every)
-    for k in range(1, stages + 1):
-        model.excavate(f"undercut_{k}", at=case.start + (k - 1) * case.interval)
+    for k, at in enumerate(times, start=1):
+        model.excavate(f"undercut_{k}", at=at)
     return model
 
 
