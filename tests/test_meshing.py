@@ -107,3 +107,34 @@ def test_quick_caving_on_the_refined_mesh(tmp_path: Path) -> None:
     rho[sim.elements(cap)] = model._materials[model._element_material[cap[0]]].rho
     assert sim.masses().sum() == pytest.approx((rho[active] * a0).sum() + sim.added_mass, rel=1e-12)
     assert abs(summary["energy_residual_J"]) < 0.02 * summary["energy_supplied_J"]
+
+
+def test_joint_traces_perturbed_in_length_and_angle_by_seed():
+    """Issue 35 (2), DESIGN §4.7: each trace's length within ±30% of the
+    persistence and its direction within ±10° of the set's (traces not
+    cut by the region's edges), the same seed giving the same traces and
+    another seed others; the jointed mesh of two such sets is conforming,
+    its elements far inside the snap-back limit of Table 1's rock (9.0 m)."""
+    js = fdem.JointSet(90.0, 20.0, 10.0, 4.0, length_jitter=0.3, angle_jitter=10.0, seed=5, name="v")
+    bounds = (0.0, 0.0, 100.0, 50.0)
+    tr = js.traces(bounds)
+    d = tr[:, 1] - tr[:, 0]
+    length = np.hypot(d[:, 0], d[:, 1])
+    inside = np.all(
+        (tr[:, :, 0] > 1e-9) & (tr[:, :, 0] < 100 - 1e-9) & (tr[:, :, 1] > 1e-9) & (tr[:, :, 1] < 50 - 1e-9), axis=1
+    )
+    assert inside.sum() > 10
+    assert np.all(length[inside] >= 0.7 * 20.0 - 1e-9) and np.all(length[inside] <= 1.3 * 20.0 + 1e-9)
+    assert np.ptp(length[inside]) > 2.0
+    angle = np.degrees(np.arctan2(d[:, 1], d[:, 0])) % 180.0
+    assert np.all(np.abs(angle - 90.0) <= 10.0 + 1e-9) and np.ptp(angle) > 5.0
+    assert np.array_equal(js.traces(bounds), tr)
+    assert not np.array_equal(replace(js, seed=6).traces(bounds), tr)
+    mesh = fdem.jointed_rectangle(
+        100.0, 50.0, 2.0, [js, fdem.JointSet(0.0, 30.0, 15.0, 6.0, angle_jitter=8.0, seed=2, name="h")]
+    )
+    p, t = mesh.points, mesh.triangles
+    longest = np.max([np.hypot(*(p[t[:, (k + 1) % 3]] - p[t[:, k]]).T) for k in range(3)], axis=0)
+    assert longest.max() < 9.0
+    with pytest.raises(ValueError, match="angle_jitter"):
+        fdem.JointSet(0.0, 1.0, 0.0, 1.0, angle_jitter=60.0)

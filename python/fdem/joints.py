@@ -51,8 +51,15 @@ class JointSet:
     jitter : float
         Random perturbation (m) of each trace along its line and of each line
         across (the latter capped at a quarter of the spacing), ``>= 0``.
+    length_jitter : float
+        Random change of each trace's length, as a fraction of the
+        persistence (uniform in ±that), ``0 <= length_jitter < 1``.
+    angle_jitter : float
+        Random rotation of each trace about its middle (degrees, uniform
+        in ±that), ``0 <= angle_jitter < 45``.
     seed : int
-        Seed of the perturbation.
+        Seed of the perturbations (DESIGN §4.7); with all jitters zero
+        the pattern is regular.
     name : str
         Name of the set's facet set in the mesh.
 
@@ -73,6 +80,8 @@ class JointSet:
     jitter: float = 0.0
     seed: int = 0
     name: str = "joints"
+    length_jitter: float = 0.0
+    angle_jitter: float = 0.0
 
     def __post_init__(self) -> None:
         where = f"joint set '{self.name}'"
@@ -83,6 +92,14 @@ class JointSet:
             object.__setattr__(self, p, positive(f"{where}: {p}", getattr(self, p), allow_zero=True))
         object.__setattr__(self, "stagger", number(f"{where}: stagger", self.stagger))
         object.__setattr__(self, "offset", number(f"{where}: offset", self.offset))
+        lj = number(f"{where}: length_jitter", self.length_jitter)
+        aj = number(f"{where}: angle_jitter", self.angle_jitter)
+        if not 0 <= lj < 1:
+            raise ValueError(f"{where}: length_jitter = {lj} must lie in [0, 1) (a fraction of the persistence)")
+        if not 0 <= aj < 45:
+            raise ValueError(f"{where}: angle_jitter = {aj} must lie in [0, 45) degrees")
+        object.__setattr__(self, "length_jitter", lj)
+        object.__setattr__(self, "angle_jitter", aj)
         if not isinstance(self.name, str) or not self.name:
             raise ValueError("joint set name must be a non-empty string")
 
@@ -124,7 +141,17 @@ class JointSet:
             t = t_lo - period + phase
             while t < t_hi:
                 start = t + (rng.uniform(-1, 1) * self.jitter if self.jitter else 0.0)
-                seg = _clip(s * n + start * d, s * n + (start + self.persistence) * d, bounds)
+                p, q = s * n + start * d, s * n + (start + self.persistence) * d
+                if self.length_jitter or self.angle_jitter:
+                    # about the trace's middle: a length and a direction of
+                    # its own (draws only when asked, so that the regular
+                    # and position-jittered patterns stay as they were)
+                    mid = 0.5 * (p + q)
+                    half = 0.5 * self.persistence * (1 + rng.uniform(-1, 1) * self.length_jitter)
+                    b = a + math.radians(rng.uniform(-1, 1) * self.angle_jitter)
+                    u = np.array([math.cos(b), math.sin(b)])
+                    p, q = mid - half * u, mid + half * u
+                seg = _clip(p, q, bounds)
                 if seg is not None:
                     out.append(seg)
                 t += period
