@@ -60,7 +60,7 @@ from .errors import SimulationError
 from .joints import JointSet, jointed_rectangle
 from .materials import Elastic, MohrCoulombRankine
 from .model import Model
-from .plot import plot_field
+from .plot import plot_field, pyplot
 from .simulation import Simulation
 
 __all__ = ["CavingCase", "caving_model", "run_caving", "probe_stress", "PAPER_PROBES", "paper_joint_sets"]
@@ -414,14 +414,15 @@ def caving_model(case: CavingCase | None = None) -> Model:
         times.append(at)
     mesh = mesh.with_sets(element_sets=element_sets)
     g = UNIT_WEIGHT / ROCK.rho
-    rock, p = case.rock or ROCK, case.top_pressure
+    # the rock's material (``rock`` above holds its element ids)
+    material, p = case.rock or ROCK, case.top_pressure
     # the overburden as the cap's weight: p W = (ρ' − ρ) g A, with A the
     # area of the elements that make the cap (whole rows: 4 m of a 5 m cap
     # on the quick mesh)
     cap_area = float(mesh.areas()[cap].sum())
-    rho_cap = rock.rho + (p * WIDTH / (g * cap_area) if case.overburden == "mass" else 0.0)
-    elastic = Elastic(E=rock.E, nu=rock.nu, rho=rho_cap)
-    model = Model(mesh, materials={"rock": rock, "support": rock, "cap": elastic}).set_gravity(0.0, -g)
+    rho_cap = material.rho + (p * WIDTH / (g * cap_area) if case.overburden == "mass" else 0.0)
+    elastic = Elastic(E=material.E, nu=material.nu, rho=rho_cap)
+    model = Model(mesh, materials={"rock": material, "support": material, "cap": elastic}).set_gravity(0.0, -g)
     model.fix("left", x=True, y=False).fix("right", x=True, y=False).fix("bottom")
     model.set_geostatic_stress(top=TOP, pressure=p, k0=case.k0)
     if case.overburden == "pressure":
@@ -897,10 +898,7 @@ def _write_metrics(out: Path, sim: Simulation, rows: list[list[float]], case: Ca
     ``metrics.png`` (cave back height and yielded area against time) and
     ``subsidence.csv`` (the top face's settlement against x at the end);
     returns the last sample's metrics for the summary."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     with open(out / "metrics.csv", "w", newline="") as f:
         w = csv.writer(f)

@@ -24,6 +24,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .output import stress_at
+from .plot import pyplot, save_axes
+
 if TYPE_CHECKING:
     from .simulation import Simulation
 
@@ -71,24 +74,10 @@ def probe_points(frame: str, width: float) -> NDArray[np.float64]:
 
 
 def probe_stress(sim: Simulation, points: Any) -> NDArray[np.float64]:
-    """Stress ``[xx, yy, zz, xy]`` (Pa) of the element containing each point
-    (current configuration); NaN where no element does (a void). The CST
-    stress is constant in an element, so this is the value the paper's
-    nodal output would average over the elements around a node."""
-    pts = np.atleast_2d(np.asarray(points, dtype=float))
-    keep = np.flatnonzero(sim.active())
-    p = sim.positions()[sim.triangles()[keep]]
-    s = sim.stress()
-    a, b, c = p[:, 0], p[:, 1], p[:, 2]
-    d = (b[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (a[:, 1] - c[:, 1])
-    out = np.full((len(pts), 4), np.nan)
-    for i, q in enumerate(pts):
-        l1 = ((b[:, 1] - c[:, 1]) * (q[0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (q[1] - c[:, 1])) / d
-        l2 = ((c[:, 1] - a[:, 1]) * (q[0] - c[:, 0]) + (a[:, 0] - c[:, 0]) * (q[1] - c[:, 1])) / d
-        inside = np.flatnonzero((l1 >= -1e-9) & (l2 >= -1e-9) & (1 - l1 - l2 >= -1e-9))
-        if len(inside):
-            out[i] = s[keep[inside[0]]]
-    return out
+    """Stress ``[xx, yy, zz, xy]`` (Pa) at each point, NaN in a void
+    (:func:`fdem.output.stress_at`): a CST element's stress is the value
+    the paper's nodal output would average over the elements at a node."""
+    return stress_at(sim, points)
 
 
 def stress_profile(sim: Simulation, y: float, x_edges: NDArray[np.float64], half_height: float) -> NDArray[np.float64]:
@@ -185,11 +174,7 @@ def write_table2(out: Path, rows: list[list[float]], frame: str, points: NDArray
 def plot_table2(out: Path, rows: list[list[float]], frame: str) -> None:
     """``table2.png``: σyy and σxx at the nine points over time (ours, solid;
     the mirror points, dotted) with the paper's values at 3.5 s (stars)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     data = np.array(rows, dtype=float)
     fig, axes = plt.subplots(1, 2, figsize=(13, 5), dpi=110, sharex=True)
     colours = plt.get_cmap("tab10")
@@ -226,11 +211,7 @@ def plot_abutments(
     lithostatic value and the undercut's edges; ``paper`` are (x, σyy in
     MPa) of the paper's points near the line, in the model's frame, both
     sides."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(10, 4.5), dpi=110)
     ax.plot(x, syy / 1e6, label=f"fdem, t = {time:.2f} s")
     ax.axhline(lithostatic / 1e6, color="k", ls="--", lw=1, label="lithostatic −(p + γ depth)")
@@ -239,11 +220,11 @@ def plot_abutments(
     if paper:
         px, ps = zip(*paper, strict=True)
         ax.plot(px, ps, "r*", ms=10, ls="none", label="the paper at 3.5 s (its x = 16 m, left frame, and mirrored)")
-    ax.set_xlabel("x (m); dotted: the undercut's edges")
-    ax.set_ylabel("σyy (MPa)")
-    ax.set_title(f"Vertical stress along y = {y:.0f} m across the abutments")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "abutment.png")
-    plt.close(fig)
+    save_axes(
+        fig,
+        ax,
+        out / "abutment.png",
+        xlabel="x (m); dotted: the undercut's edges",
+        ylabel="σyy (MPa)",
+        title=f"Vertical stress along y = {y:.0f} m across the abutments",
+    )

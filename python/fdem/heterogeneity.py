@@ -46,8 +46,9 @@ def weibull_shape(cv: float) -> float:
 
 
 def _normal_cdf(z: NDArray[np.float64]) -> NDArray[np.float64]:
-    erf = np.frompyfunc(math.erf, 1, 1)
-    return (0.5 * (1.0 + erf(z / math.sqrt(2.0)).astype(float))).astype(float)
+    """Φ(z), the standard normal distribution function, elementwise."""
+    erf = np.vectorize(math.erf, otypes=[float])
+    return np.asarray(0.5 * (1.0 + erf(z / math.sqrt(2.0))), dtype=float)
 
 
 def _gaussian_field(points: NDArray[np.float64], length: float, rng: np.random.Generator) -> NDArray[np.float64]:

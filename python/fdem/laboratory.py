@@ -4,7 +4,6 @@ virtual laboratory specimens (plane-strain compression, triaxial, tension).
 
 from __future__ import annotations
 
-import csv
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,6 +17,8 @@ from ._checks import float_array, positive
 from .materials import Elastic
 from .mesh import Mesh
 from .model import Amplitude, Model
+from .output import write_csv
+from .plot import pyplot, save_axes
 
 __all__ = [
     "MaterialPointResult",
@@ -299,18 +300,14 @@ class BrazilianResult:
         """Writes ``brazilian.csv`` (the samples) and ``brazilian.png``
         (load against closure, the first crack and the peak marked) into
         ``out``; returns their paths."""
-        import matplotlib
-
-        matplotlib.use("Agg", force=False)
-        import matplotlib.pyplot as plt
-
+        plt = pyplot()
         d = Path(out)
         d.mkdir(parents=True, exist_ok=True)
-        table = d / "brazilian.csv"
-        with open(table, "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(["time_s", "closure_m", "load_N_per_m", "centre_sxx_Pa", "centre_sxx_elastic_Pa"])
-            w.writerows(zip(self.time, self.closure, self.load, self.centre_stress, self.centre_reference, strict=True))
+        table = write_csv(
+            d / "brazilian.csv",
+            ["time_s", "closure_m", "load_N_per_m", "centre_sxx_Pa", "centre_sxx_elastic_Pa"],
+            zip(self.time, self.closure, self.load, self.centre_stress, self.centre_reference, strict=True),
+        )
         picture = d / "brazilian.png"
         fig, ax = plt.subplots(figsize=(6.5, 4.5), dpi=110)
         ax.plot(self.closure * 1e6, self.load / 1e3, label="load")
@@ -326,14 +323,14 @@ class BrazilianResult:
             j = int(np.searchsorted(self.time, self.first_crack["time"]))
             j = min(j, len(self.time) - 1)
             ax.plot([self.closure[j] * 1e6], [self.first_crack["load"] / 1e3], "ko", mfc="none", label="first crack")
-        ax.set_xlabel("closure of the loaders (µm)")
-        ax.set_ylabel("load P (kN per m thickness)")
-        ax.set_title(f"Brazilian test, D = {self.diameter * 1e3:.0f} mm")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-        fig.tight_layout()
-        fig.savefig(picture)
-        plt.close(fig)
+        save_axes(
+            fig,
+            ax,
+            picture,
+            xlabel="closure of the loaders (µm)",
+            ylabel="load P (kN per m thickness)",
+            title=f"Brazilian test, D = {self.diameter * 1e3:.0f} mm",
+        )
         return [table, picture]
 
 
@@ -492,18 +489,14 @@ class SpecimenResult:
         """Writes ``{name}.csv`` (the samples) and ``{name}.png`` (stress
         against strain, the peak marked) into ``out``; returns their
         paths."""
-        import matplotlib
-
-        matplotlib.use("Agg", force=False)
-        import matplotlib.pyplot as plt
-
+        plt = pyplot()
         d = Path(out)
         d.mkdir(parents=True, exist_ok=True)
-        table = d / f"{name}.csv"
-        with open(table, "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(["time_s", "axial_strain", "axial_stress_Pa", "lateral_strain", "cracks"])
-            w.writerows(zip(self.time, self.strain, self.stress, self.lateral_strain, self.cracks, strict=True))
+        table = write_csv(
+            d / f"{name}.csv",
+            ["time_s", "axial_strain", "axial_stress_Pa", "lateral_strain", "cracks"],
+            zip(self.time, self.strain, self.stress, self.lateral_strain, self.cracks, strict=True),
+        )
         picture = d / f"{name}.png"
         fig, ax = plt.subplots(figsize=(6.5, 4.5), dpi=110)
         ax.plot(self.strain * 1e3, self.stress / 1e6, label=f"{self.kind}")
@@ -514,14 +507,15 @@ class SpecimenResult:
             ms=10,
             label=f"peak {self.peak_stress / 1e6:.2f} MPa",
         )
-        ax.set_xlabel("axial strain (‰)")
-        ax.set_ylabel(f"axial stress (MPa, {'compression' if self.kind == 'compression' else 'tension'} positive)")
-        ax.set_title(f"{self.kind.capitalize()} specimen: {int(self.cracks[-1])} cracks at the end")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-        fig.tight_layout()
-        fig.savefig(picture)
-        plt.close(fig)
+        sense = "compression" if self.kind == "compression" else "tension"
+        save_axes(
+            fig,
+            ax,
+            picture,
+            xlabel="axial strain (‰)",
+            ylabel=f"axial stress (MPa, {sense} positive)",
+            title=f"{self.kind.capitalize()} specimen: {int(self.cracks[-1])} cracks at the end",
+        )
         return [table, picture]
 
 

@@ -41,6 +41,36 @@ def _pad3(a: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.column_stack([a, np.zeros(len(a))])
 
 
+def stress_at(sim: Simulation, points: Any) -> NDArray[np.float64]:
+    """Stress ``[xx, yy, zz, xy]`` (Pa) of the active element containing
+    each point (m, current configuration), shape (k, 4); NaN where no
+    element does (a void). The CST stress is constant in an element."""
+    pts = np.atleast_2d(np.asarray(points, dtype=float))
+    keep = np.flatnonzero(sim.active())
+    p = sim.positions()[sim.triangles()[keep]]
+    s = sim.stress()
+    a, b, c = p[:, 0], p[:, 1], p[:, 2]
+    d = (b[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (a[:, 1] - c[:, 1])
+    out = np.full((len(pts), 4), np.nan)
+    for i, q in enumerate(pts):
+        l1 = ((b[:, 1] - c[:, 1]) * (q[0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (q[1] - c[:, 1])) / d
+        l2 = ((c[:, 1] - a[:, 1]) * (q[0] - c[:, 0]) + (a[:, 0] - c[:, 0]) * (q[1] - c[:, 1])) / d
+        inside = np.flatnonzero((l1 >= -1e-9) & (l2 >= -1e-9) & (1 - l1 - l2 >= -1e-9))
+        if len(inside):
+            out[i] = s[keep[inside[0]]]
+    return out
+
+
+def write_csv(path: str | os.PathLike[str], header: Sequence[str], rows: Any) -> Path:
+    """Writes a table (a header and rows) as CSV; returns its path."""
+    target = Path(path)
+    with open(target, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(list(header))
+        w.writerows(rows)
+    return target
+
+
 def cell_fields(sim: Simulation) -> dict[str, NDArray[Any]]:
     """The element fields written to each frame."""
     stress = sim.stress()
@@ -381,21 +411,12 @@ class VtuSeries:
     def _append_reactions(self, sim: Simulation) -> None:
         if not self.reactions:
             return
-        row: list[float] = [sim.time, sim.steps]
+        head, row = ["time", "step"], [sim.time, float(sim.steps)]
         for group in self.reactions:
             r = sim.reaction(group)
+            head += [f"{group}_fx", f"{group}_fy", f"{group}_ux", f"{group}_uy"]
             row += [*r["force"].tolist(), *r["displacement"].tolist()]
-        new = not self.reactions_csv.exists()
-        with open(self.reactions_csv, "a", newline="") as f:
-            w = csv.writer(f)
-            if new:
-                head = ["time", "step"]
-                for g in self.reactions:
-                    head += [f"{g}_fx", f"{g}_fy", f"{g}_ux", f"{g}_uy"]
-                w.writerow(head)
-            w.writerow(row)
-            f.flush()
-            os.fsync(f.fileno())
+        _append_row(self.reactions_csv, head, row)
 
 
 def _append_row(path: Path, head: list[str], row: list[float]) -> None:

@@ -12,7 +12,32 @@ from .output import cell_fields
 if TYPE_CHECKING:
     from .simulation import Simulation
 
-__all__ = ["plot_field"]
+__all__ = ["plot_field", "pyplot", "save_axes"]
+
+
+def pyplot() -> Any:
+    """``matplotlib.pyplot`` on the Agg backend (files, no display), for
+    the pictures fdem writes."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_axes(fig: Any, ax: Any, path: str | os.PathLike[str], *, xlabel: str, ylabel: str, title: str) -> None:
+    """Labels a one-panel figure (grid, legend), saves it as PNG and
+    closes it."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    pyplot().close(fig)
+
 
 _LABELS = {
     "principal_stress_1": ("first principal stress σ1", "MPa", 1e-6),

@@ -20,7 +20,7 @@ from . import _core
 from ._checks import float_array, index_array, number, positive, whole
 from .errors import CheckpointError, EnergyBalanceError, EnergyBalanceWarning, SimulationError
 from .model import Model
-from .output import VtuSeries, write_vtu
+from .output import VtuSeries, stress_at, write_vtu
 from .progress import RunProgress
 
 __all__ = ["Simulation"]
@@ -291,6 +291,11 @@ class Simulation:
         copies nodes; a copy of a held node keeps its support)."""
         return self._core.node_origins()
 
+    def _group_nodes(self, where: str | Any) -> NDArray[np.bool_]:
+        """Which nodes now belong to the model's node group ``where``: its
+        nodes and the copies crack insertion made of them."""
+        return np.isin(self._core.node_origins(), self.model.mesh.nodes(where))
+
     def reaction(self, where: str | Any) -> dict[str, Any]:
         """The load on a support: the force the model exerts on the
         supports of the node group ``where`` (a group name or node ids of
@@ -302,8 +307,7 @@ class Simulation:
         :meth:`reaction_forces` over the group: a platen pressing down on a
         specimen (prescribed ``vy < 0``) reads a positive ``force[1]``, the
         specimen pushing it back up."""
-        ids = self.model.mesh.nodes(where)
-        mask = np.isin(self._core.node_origins(), ids)
+        mask = self._group_nodes(where)
         r = self._core.reaction_forces()[mask]
         u = self.displacements()[mask]
         return {"force": -r.sum(axis=0), "displacement": u.mean(axis=0), "nodes": int(mask.sum())}
@@ -316,11 +320,8 @@ class Simulation:
         made of them): ``{"displacement": (2,), "velocity": (2,)}``, means
         over its nodes (m, m/s)."""
         if _is_point(where):
-            from .caving_stress import probe_stress
-
-            return {"stress": probe_stress(self, [[float(where[0]), float(where[1])]])[0]}
-        ids = self.model.mesh.nodes(where)
-        mask = np.isin(self._core.node_origins(), ids)
+            return {"stress": stress_at(self, [[float(where[0]), float(where[1])]])[0]}
+        mask = self._group_nodes(where)
         return {
             "displacement": self.displacements()[mask].mean(axis=0),
             "velocity": self.velocities()[mask].mean(axis=0),
