@@ -2,7 +2,10 @@
 (elements × steps / wall seconds) on structured meshes of about 10^4, 10^5
 and 10^6 triangles, at 1 and 2 threads.
 
-Run: python benchmarks/elastic_step.py [--sizes 1e4 1e5 1e6] [--threads 1 2]
+Run: python benchmarks/elastic_step.py [--sizes 1e4 1e5 1e6] [--threads 1 2 4 8 16]
+
+E(n) is the parallel efficiency, (rate at n / rate at the first thread count
+listed) × (first count / n).
 
 Each case builds a block with gravity, rollers and a pressure load (so the
 node pass does the same work as in a real model), takes a warm-up chunk of
@@ -72,17 +75,19 @@ def main() -> None:
     print(f"fdem {fdem.__version__}, {platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}")
     print(
         f"{'elements':>10} {'threads':>7} {'updates/s (wall)':>17} {'per thread':>11} "
-        f"{'updates/CPU-s':>14} {'speed-up':>9}"
+        f"{'updates/CPU-s':>14} {'speed-up':>9} {'E(n)':>6}"
     )
     for size in args.sizes:
         model = build(size)
-        base = None
+        base: tuple[float, int] | None = None
         for t in args.threads:
             wall_rate, cpu_rate = measure(model, t, args.seconds, args.repeats)
-            base = base or wall_rate
+            base = base or (wall_rate, t)
+            # parallel efficiency against the first thread count measured
+            eff = (wall_rate / base[0]) * base[1] / t
             print(
                 f"{model.mesh.n_elements:>10d} {t:>7d} {wall_rate:>17.3e} {wall_rate / t:>11.3e} "
-                f"{cpu_rate:>14.3e} {wall_rate / base:>9.2f}",
+                f"{cpu_rate:>14.3e} {wall_rate / base[0]:>9.2f} {eff:>6.2f}",
                 flush=True,
             )
 

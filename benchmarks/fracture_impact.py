@@ -9,7 +9,9 @@ contact and all), at each thread count, with the cracks inserted and the
 share of time in each phase: insertion (topology edits and the rebuilds
 they trigger), fracture checks, contact, element pass.
 
-Run: python benchmarks/fracture_impact.py [--elements 1e4 1e5] [--threads 1 2] [--duration 4e-4]
+Run: python benchmarks/fracture_impact.py [--elements 1e4 1e5] [--threads 1 2 4 8 16] [--duration 4e-4]
+
+E(n) is the parallel efficiency against the first thread count listed.
 """
 
 from __future__ import annotations
@@ -63,14 +65,18 @@ def main() -> None:
         "cracks",
         "final el.",
         "updates/s",
+        "E(n)",
         "insertion",
         "checks",
         "contact",
         "elements%",
+        "nodes%",
+        "broad%",
     )
     print(" ".join(f"{h:>10}" for h in header))
     for target in args.elements:
         model = build(target)
+        base: tuple[float, int] | None = None
         for threads in args.threads:
             sim = fdem.Simulation(model, threads=threads, stiffness_damping=2e-7)
             # fly to the platen (the gap closes at GAP / SPEED), then time the impact
@@ -86,10 +92,14 @@ def main() -> None:
                 updates += 20 * 0.5 * (n + sim.n_elements)
             p1 = sim.phase_times()
             share = {k: (p1[k] - p0[k]) / wall for k in p1}
+            rate = updates / wall
+            base = base or (rate, threads)
+            eff = (rate / base[0]) * base[1] / threads  # against the first thread count listed
             print(
                 f"{model.mesh.n_elements:>10} {threads:>10} {sim.steps - s0:>10} {sim.insertions:>10} "
-                f"{sim.n_elements:>10} {updates / wall:>10.3e} {share['topology']:>10.1%} {share['fracture']:>10.1%} "
-                f"{share['surface']:>10.1%} {share['elements']:>10.1%}",
+                f"{sim.n_elements:>10} {rate:>10.3e} {eff:>10.2f} {share['topology']:>10.1%} "
+                f"{share['fracture']:>10.1%} {share['surface']:>10.1%} {share['elements']:>10.1%} "
+                f"{share['nodes']:>10.1%} {share['broad_phase']:>10.1%}",
                 flush=True,
             )
 

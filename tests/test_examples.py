@@ -61,3 +61,36 @@ def test_brazilian_example(elements, loading):
 def test_brazilian_example_fine_mesh():
     """The same on 32 elements across the radius (45 s on 2 cores)."""
     _check_brazilian(load("brazilian").main(32, "jaws", out=None))
+
+
+def test_notched_beam_runs_elastic_until_it_cracks(tmp_path):
+    """The notched-beam example on its coarse mesh (20 mm at the
+    ligament) to 0.12 mm: no crack below about 8 kN/m, the curve and its
+    picture written. Its stiffness against the closed form is read off
+    the loading curve, and that depends on the samples fitted by ±5%
+    (docs/fracture.md); the slow test below checks it with the rest of
+    issue 33 (3)."""
+    r = load("three_point_bending").main(0.02, deflection=0.12e-3, out=str(tmp_path))
+    assert r["cracks"] == 0 and r["peak_load"] > 0.4 * r["petersson_peak"]
+    assert (tmp_path / "beam.png").stat().st_size > 10_000
+    assert (tmp_path / "beam.csv").read_text().startswith("time_s,deflection_m")
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 33 (3), open: with the default insert_at a check that cuts several nodes still swings the "
+    "load by 13% of the peak on this mesh (docs/fracture.md, 'The notched beam')",
+)
+def test_notched_beam_insertion_releases_no_load():
+    """Issue 33 (3) on the 10 mm mesh (about 4 min on 2 cores): with the
+    default early insertion no sample across which cracks were inserted
+    may change the load by more than 5% of the peak, and the peak must be
+    the one of insertion at full softening (insert_at = 1, no bonds)
+    within 3%. Measured 2026-11-25: 13.2% and a peak of 22.0 kN/m against
+    about 18.6."""
+    beam = load("three_point_bending")
+    early, late = beam.main(0.01, out=None), beam.main(0.01, insert_at=1.0, out=None)
+    assert early["largest_jump_at_insertion"] < 0.05
+    assert early["peak_load"] == pytest.approx(late["peak_load"], rel=0.03)
+    assert early["stiffness"] == pytest.approx(early["closed_form_stiffness"], rel=0.05)

@@ -411,7 +411,9 @@ class Simulation:
         """The intact cohesive bonds across cracks inserted before full
         softening (``Model.fracture(insert_at=...)``): ``nodes`` (k, 2),
         ``length`` (m), ``strength`` (Pa), ``final_opening`` (m),
-        ``max_opening`` (m) and ``damage`` (0–1)."""
+        ``max_opening`` (m), ``damage`` (0–1) and ``offset`` (k, 2) (m: the
+        opening with which a bond took over the force through its node when
+        its crack was inserted, docs/fracture.md)."""
         return self._core.bonds()
 
     def energies(self) -> dict[str, float]:

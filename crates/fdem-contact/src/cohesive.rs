@@ -38,6 +38,16 @@ pub struct Bond {
     pub final_opening: f64,
     /// Largest opening `δ_max` (m) so far.
     pub max_opening: f64,
+    /// Opening (m) the bond counts on top of `d`: the bond acts on
+    /// `d + offset`. Set when the crack is inserted so that the bond then
+    /// carries the force the elements carried through the split node
+    /// (traction continuity; within the elastic range, `|offset| ≤ δ₀`);
+    /// zero for a bond that starts slack. Fixed in the global frame: a
+    /// bond lives until its crack has opened by `δ_c` (tens of µm), over
+    /// which its pieces turn little. Checkpoints keep it beside the
+    /// bonds (format 8), so it is not part of this type's serial form.
+    #[serde(skip)]
+    pub offset: Vec2,
 }
 
 /// What one evaluation of a bond gives.
@@ -106,7 +116,7 @@ impl Bond {
     /// Updates the bond for positions `xa`, `xb` (m) and returns its force
     /// and energies.
     pub fn update(&mut self, xa: Vec2, xb: Vec2) -> BondResponse {
-        let d = [xb[0] - xa[0], xb[1] - xa[1]];
+        let d = self.opening(xa, xb);
         let delta = (d[0] * d[0] + d[1] * d[1]).sqrt();
         let before = self.dissipation(self.max_opening);
         if delta > self.max_opening {
@@ -128,7 +138,13 @@ impl Bond {
     /// updating it: at the positions of its last [`update`](Self::update),
     /// the force that update returned, to the bit (the same expressions).
     pub fn force(&self, xa: Vec2, xb: Vec2) -> Vec2 {
-        self.spring_force(self.current_secant(), [xb[0] - xa[0], xb[1] - xa[1]])
+        self.spring_force(self.current_secant(), self.opening(xa, xb))
+    }
+
+    /// The opening the law acts on, `x_b − x_a + offset` (m).
+    #[inline]
+    fn opening(&self, xa: Vec2, xb: Vec2) -> Vec2 {
+        [xb[0] - xa[0] + self.offset[0], xb[1] - xa[1] + self.offset[1]]
     }
 
     /// Secant stiffness (Pa/m) for the largest opening so far; 0 once broken.
@@ -155,7 +171,15 @@ mod tests {
     use super::*;
 
     fn bond() -> Bond {
-        Bond { nodes: [0, 1], length: 0.5, stiffness: 1e12, strength: 2e6, final_opening: 1e-4, max_opening: 0.0 }
+        Bond {
+            nodes: [0, 1],
+            length: 0.5,
+            stiffness: 1e12,
+            strength: 2e6,
+            final_opening: 1e-4,
+            max_opening: 0.0,
+            offset: [0.0; 2],
+        }
     }
 
     /// Loading to `δ_c` dissipates `½ t₀ δ_c ℓ` whatever the path, and the
@@ -181,6 +205,31 @@ mod tests {
         assert!(last.broken);
         let expected = 0.5 * 2e6 * 1e-4 * 0.5;
         assert!((total - expected).abs() < 1e-12 * expected, "{total} vs {expected}");
+    }
+
+    /// A bond with an offset carries `k ℓ |offset|` at zero opening, along
+    /// the offset, holds `½ k ℓ |offset|²`, and softens from where
+    /// `d + offset` reaches `δ₀`: the law shifted by the offset, still
+    /// dissipating `½ t₀ δ_c ℓ` in all.
+    #[test]
+    fn an_offset_bond_carries_its_preload_at_zero_opening() {
+        let mut b = bond();
+        b.offset = [0.6e-6, 0.8e-6]; // |o| = 1 µm, half of δ₀ = 2 µm
+        let r = b.update([0.0, 0.0], [0.0, 0.0]);
+        let (k, l) = (b.stiffness, b.length);
+        assert_eq!(r.force, [-k * l * 0.6e-6, -k * l * 0.8e-6]);
+        assert!((r.elastic - 0.5 * k * l * 1e-12).abs() < 1e-12 * r.elastic);
+        assert_eq!(r.dissipated, 0.0);
+        // opening along the offset by 1 µm reaches δ₀ exactly: no damage yet
+        let r = b.update([0.0, 0.0], [0.6e-6, 0.8e-6]);
+        assert_eq!(r.dissipated, 0.0);
+        let mut total = 0.0;
+        for i in 1..=2000 {
+            let delta = 1e-6 + 1e-4 * i as f64 / 2000.0;
+            total += b.update([0.0, 0.0], [0.6 * delta, 0.8 * delta]).dissipated;
+        }
+        let expected = 0.5 * 2e6 * 1e-4 * 0.5;
+        assert!((total - expected).abs() < 1e-9 * expected, "{total} vs {expected}");
     }
 
     /// `force` without an update gives, at the positions of the last update,

@@ -782,8 +782,9 @@ impl PySimulation {
 
     /// The intact cohesive bonds across cracks inserted before full softening:
     /// `nodes` (k, 2) int64, `length` (m), `strength` t₀ (Pa),
-    /// `final_opening` δ_c (m), `max_opening` (m), `damage` (0–1), as a dict
-    /// of arrays.
+    /// `final_opening` δ_c (m), `max_opening` (m), `damage` (0–1), `offset`
+    /// (k, 2) (m, the opening with which each bond took over the force
+    /// through its node when its crack was inserted), as a dict of arrays.
     fn bonds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         guard(|| {
             let b = self.sim.bonds();
@@ -796,6 +797,8 @@ impl PySimulation {
             d.set_item("final_opening", col(&|b| b.final_opening))?;
             d.set_item("max_opening", col(&|b| b.max_opening))?;
             d.set_item("damage", col(&|b| 1.0 - b.secant(b.max_opening) / b.stiffness))?;
+            let offsets: Vec<f64> = b.iter().flat_map(|b| b.offset).collect();
+            d.set_item("offset", Array2::from_shape_vec((b.len(), 2), offsets).expect("shape").into_pyarray(py))?;
             Ok(d)
         })
     }

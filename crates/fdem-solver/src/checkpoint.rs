@@ -59,8 +59,9 @@ pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
 /// read, so its run continues with that direction (not bit for bit the run
 /// an older build would continue: its arithmetic differs in the last bits).
 /// Format 6 appends [`Format6`] (the contact dashpots of the node pass),
-/// format 7 then [`Format7`] (the elements' lineage).
-pub const FORMAT_VERSION: u32 = 7;
+/// format 7 then [`Format7`] (the elements' lineage), format 8 then
+/// [`Format8`] (the bonds' offsets).
+pub const FORMAT_VERSION: u32 = 8;
 const HEADER: usize = 40;
 
 /// Why a checkpoint could not be written or read.
@@ -322,6 +323,22 @@ impl Format7 {
     }
 }
 
+/// What format 8 added, written after [`Format7`]: each bond's offset
+/// ([`Bond::offset`](fdem_contact::Bond::offset), the opening with which a
+/// bond took over the force through its node when its crack was
+/// inserted), in the order of the bonds. A file of an older format
+/// restores its bonds slack (offset zero), as they were made.
+#[derive(Serialize, Deserialize)]
+struct Format8 {
+    offsets: Vec<Vec2>,
+}
+
+impl Format8 {
+    fn of(s: &Simulation) -> Self {
+        Format8 { offsets: s.fracture.as_ref().map_or_else(Vec::new, |f| f.bonds.iter().map(|b| b.offset).collect()) }
+    }
+}
+
 fn le_u32(b: &[u8]) -> u32 {
     u32::from_le_bytes([b[0], b[1], b[2], b[3]])
 }
@@ -344,6 +361,7 @@ impl Simulation {
         state.extend(postcard::to_stdvec(&Format4::of(self)).expect("format-4 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format6::of(self)).expect("format-6 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format7::of(self)).expect("format-7 data is serialisable"));
+        state.extend(postcard::to_stdvec(&Format8::of(self)).expect("format-8 data is serialisable"));
         let mut out = Vec::with_capacity(HEADER + state.len() + user.len());
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -428,8 +446,23 @@ impl Simulation {
         } else {
             (None, rest)
         };
+        let (offsets, rest) = if version >= 8 {
+            let (o, rest) = postcard::take_from_bytes::<Format8>(rest).map_err(decode)?;
+            (Some(o), rest)
+        } else {
+            (None, rest)
+        };
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
+        }
+        if let Some(Format8 { offsets }) = offsets {
+            let bonds = owned.fracture.as_mut().map_or(&mut [][..], |f| &mut f.bonds[..]);
+            if offsets.len() != bonds.len() || offsets.iter().any(|o| !(o[0].is_finite() && o[1].is_finite())) {
+                return Err(CheckpointError::Invalid("the bonds' offsets do not match the bonds".into()));
+            }
+            for (b, o) in bonds.iter_mut().zip(offsets) {
+                b.offset = o;
+            }
         }
         corners.apply(&mut owned);
         if version < 5 {

@@ -254,10 +254,11 @@ impl Simulation {
         self.surface_forces(0.0);
     }
 
-    /// Forces after a topology change: the listed (new or reshaped)
-    /// elements' internal forces from their stress, then pressure, contact
-    /// and bond forces on the new surfaces. The other elements keep theirs.
-    pub(crate) fn refresh_forces_of(&mut self, touched: &[u32]) {
+    /// Element forces after a topology change: the listed (new or
+    /// reshaped) elements' internal forces from their stress; the other
+    /// elements keep theirs. The caller then recomputes the pressure,
+    /// contact and bond forces on the new surfaces ([`Self::surface_forces`]).
+    pub(crate) fn refresh_element_forces_of(&mut self, touched: &[u32]) {
         let Simulation { nodes, elems, .. } = self;
         let inp = ElementInputs {
             x: &nodes.x,
@@ -274,12 +275,11 @@ impl Simulation {
             plastic: !self.elastic_stage,
         };
         passes::element_forces_of(&inp, touched, &elems.stress, &mut elems.force);
-        self.surface_forces(0.0);
     }
 
     /// Pressure and contact forces at the current configuration; `dt` is the
     /// step just taken (for the tangential slip increment).
-    fn surface_forces(&mut self, dt: f64) {
+    pub(crate) fn surface_forces(&mut self, dt: f64) {
         let contact = self.contact.as_mut().map(|c| {
             let out = AssemblyOut {
                 forces: &mut self.contact_force,

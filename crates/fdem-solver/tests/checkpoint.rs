@@ -159,6 +159,12 @@ fn format7_len(sim: &Simulation) -> usize {
     varint(sim.n_elements()) + sim.element_parents().iter().map(|&p| varint(p as usize)).sum::<usize>()
 }
 
+/// Bytes of the format-8 block (bond offsets): a varint count and two f64
+/// per bond.
+fn format8_len(sim: &Simulation) -> usize {
+    varint(sim.bonds().len()) + 16 * sim.bonds().len()
+}
+
 /// The plate with contact on its own surface (a dashpot of damping ratio
 /// 0.1).
 fn plate_with_contact(n: usize) -> ModelSpec {
@@ -180,7 +186,11 @@ fn a_format_1_file_still_reads_with_physical_masses() {
     let m = a.triangles().len();
     // postcard: varint length + m f64, `None` (one byte), one f64; two
     // zero lengths; the format-4, format-6 and format-7 blocks
-    let v1 = downgrade(&v3, 1, varint(m) + 8 * m + 1 + 8 + 2 + format4_len(m) + format6_len(0) + format7_len(&a));
+    let v1 = downgrade(
+        &v3,
+        1,
+        varint(m) + 8 * m + 1 + 8 + 2 + format4_len(m) + format6_len(0) + format7_len(&a) + format8_len(&a),
+    );
     let (mut b, user) = Simulation::from_checkpoint_bytes(&v1, 1).unwrap();
     assert_eq!(user, b"meta");
     assert!(b.mass_scale().iter().all(|&s| s == 1.0) && b.mass_scale().len() == m);
@@ -201,7 +211,7 @@ fn a_format_2_file_with_contact_reads_without_corner_contacts() {
     // two lists of nb: an empty memory is 22 bytes (facet u32::MAX as a
     // 5-byte varint, two f64, `None`), an empty contact 70 (facet, 7 f64,
     // a bool); then the format-4, format-6 and format-7 blocks
-    let blocks = format4_len(a.n_elements()) + format6_len(nb) + format7_len(&a);
+    let blocks = format4_len(a.n_elements()) + format6_len(nb) + format7_len(&a) + format8_len(&a);
     let v2 = downgrade(&v3, 2, 2 * varint(nb) + nb * (22 + 70) + blocks);
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v2, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v3, "format 2 read back differs");
@@ -239,7 +249,7 @@ fn a_format_4_file_keeps_its_crack_directions() {
     assert!(codes.iter().filter(|&&c| c != 0.0).count() >= cracked);
     // the same bytes marked as format 4: each code is read as an angle
     let v6 = a.checkpoint_bytes(b"");
-    let v4 = downgrade(&v6, 4, format6_len(0) + format7_len(&a));
+    let v4 = downgrade(&v6, 4, format6_len(0) + format7_len(&a) + format8_len(&a));
     let (b, _) = Simulation::from_checkpoint_bytes(&v4, 1).unwrap();
     let pi = std::f64::consts::PI;
     for (e, s) in b.plastic_states().iter().enumerate() {
@@ -258,7 +268,7 @@ fn a_format_5_file_reads_without_its_dashpots_and_a_format_6_file_with_them() {
     // tests/test_caving_resume.py).
     let mut a = Simulation::new(plate_with_contact(6), 1).unwrap();
     let v6 = a.checkpoint_bytes(b"");
-    let v5 = downgrade(&v6, 5, format6_len(4 * 6) + format7_len(&a));
+    let v5 = downgrade(&v6, 5, format6_len(4 * 6) + format7_len(&a) + format8_len(&a));
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v5, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v6, "format 5 read back differs");
     a.step(40).unwrap();
@@ -368,13 +378,14 @@ fn a_format_6_file_reads_without_lineage_and_a_bad_lineage_is_refused() {
     // cut it from). An uncracked model's elements are their own parents,
     // which is what a format-6 file restores with: the same bytes back.
     // (A cracked run's pieces are placed inside their model elements by
-    // `recover_lineage`: tests/test_excavation.py.)
+    // `recover_lineage`: tests/test_excavation.py.) The format-8 block (the
+    // bonds' offsets, none here) is cut off with it.
     let mut a = Simulation::new(plate(6), 1).unwrap();
     a.step(10).unwrap();
     let v7 = a.checkpoint_bytes(b"");
     let m = a.n_elements();
     assert!(a.element_parents().iter().enumerate().all(|(e, &p)| p as usize == e));
-    let v6 = downgrade(&v7, 6, format7_len(&a));
+    let v6 = downgrade(&v7, 6, format7_len(&a) + format8_len(&a));
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v6, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v7, "format 6 read back differs");
     // nothing to place: every element is one of the model's
@@ -383,11 +394,40 @@ fn a_format_6_file_reads_without_lineage_and_a_bad_lineage_is_refused() {
     // of the state, a one-byte varint here)
     let s_len = u64::from_le_bytes(v7[16..24].try_into().unwrap()) as usize;
     let mut bad = v7.clone();
-    assert_eq!(bad[40 + s_len - 1] as usize, m - 1);
-    bad[40 + s_len - 1] = m as u8;
+    let last = 40 + s_len - 1 - format8_len(&a);
+    assert_eq!(bad[last] as usize, m - 1);
+    bad[last] = m as u8;
     let crc = crc32fast::hash(&bad[40..]);
     bad[32..36].copy_from_slice(&crc.to_le_bytes());
     reseal(&mut bad);
     let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
     assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("lineage")), "{e}");
+}
+
+#[test]
+fn a_format_7_file_reads_with_slack_bonds_and_bad_offsets_are_refused() {
+    // format 8 appends each bond's offset (a varint count and two f64 per
+    // bond). A run without bonds writes an empty list, which is what a
+    // format-7 file restores with: the same bytes back.
+    let mut a = Simulation::new(plate(6), 1).unwrap();
+    a.step(10).unwrap();
+    let v8 = a.checkpoint_bytes(b"");
+    assert!(a.bonds().is_empty());
+    let v7 = downgrade(&v8, 7, format8_len(&a));
+    let (b, _) = Simulation::from_checkpoint_bytes(&v7, 1).unwrap();
+    assert!(b.checkpoint_bytes(b"") == v8, "format 7 read back differs");
+    // one offset where there is no bond: the count (the last byte) made 1
+    // and two f64 appended
+    let s_len = u64::from_le_bytes(v8[16..24].try_into().unwrap()) as usize;
+    let mut state = v8[40..40 + s_len].to_vec();
+    *state.last_mut().unwrap() = 1;
+    state.extend_from_slice(&[0u8; 16]);
+    let mut bad = v8[..40].to_vec();
+    bad.extend_from_slice(&state);
+    bad[16..24].copy_from_slice(&(state.len() as u64).to_le_bytes());
+    let crc = crc32fast::hash(&bad[40..]);
+    bad[32..36].copy_from_slice(&crc.to_le_bytes());
+    reseal(&mut bad);
+    let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
+    assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("offsets")), "{e}");
 }
