@@ -21,10 +21,14 @@ Checks (``main`` returns them, tests/test_examples.py tests them):
   (Tada, Paris & Irwin, The Stress Analysis of Cracks Handbook, 2000,
   edge crack in pure bending, F(α) accurate to 0.2% for α ≤ 0.6), E' =
   E / (1 − ν²);
-- the peak load and its deflection;
-- the largest change of the load from one sample (0.1 ms, 20–40 fracture
-  checks) to the next across which cracks were inserted, as a fraction of
-  the peak: an insertion must not release the load;
+- the peak of the load averaged over 1 ms (the quasi-static load: the
+  raw reaction at the pad rings at a few kHz after insertions, which the
+  mass damping barely touches) and its deflection;
+- the largest change of the load across a sample (0.1 ms, 20–40
+  fracture checks) at which cracks were inserted, the mean of the 1 ms
+  after less that of the 1 ms before, as a fraction of the peak: an
+  insertion must not release the load; beside it the largest such change
+  elsewhere, the floor of this measure;
 - the work of the load, for the energy a crack took.
 
     python examples/three_point_bending.py [--size 0.01] [--insert-at 0.02] [--out beam_output]
@@ -166,23 +170,29 @@ def main(
         rows.append((sim.time, -pad["displacement"][1], pad["force"][1], -supports, sim.insertions))
     data = np.array(rows)
     t, d, load, support, cracks = data.T
-    k = int(np.argmax(load))
-    # the stiffness once the ramp is over and below 40% of the peak; it
-    # depends on this window by ±5% (docs/fracture.md, "The notched beam")
-    elastic = (t > 1.2e-2) & (load < 0.4 * load[k]) & (cracks == 0)
-    stiffness = float(np.polyfit(d[elastic], load[elastic], 1)[0])
-    jumps = np.abs(np.diff(load))
-    inserted = np.diff(cracks) > 0
+    # the quasi-static load: the pad's reaction averaged over 1 ms (11
+    # samples), which takes out the ringing (kHz) that insertions leave
+    # and the mass damping barely touches
+    mean = np.convolve(load, np.ones(11) / 11, mode="same")
+    mean[:5], mean[-5:] = load[:5], load[-5:]
+    k = int(np.argmax(mean))
+    # the stiffness once the ramp is over, before the peak and below 40%
+    # of it; it depends on this window by ±5% (docs/fracture.md)
+    elastic = (t > 1.2e-2) & (load < 0.4 * mean[k]) & (cracks == 0) & (np.arange(len(t)) < k)
+    stiffness = float(np.polyfit(d[elastic], load[elastic], 1)[0]) if elastic.sum() > 2 else float("nan")
+    change_at, change_else = _changes(load, cracks)
     work = float(np.sum(0.5 * (load[1:] + load[:-1]) * np.diff(d)))
     summary = {
         "elements": float(beam.mesh.n_elements),
         "stiffness": stiffness,
         "closed_form_stiffness": closed_form_stiffness(),
-        "peak_load": float(load[k]),
+        "peak_load": float(mean[k]),
+        "peak_load_raw": float(load.max()),
         "peak_deflection": float(d[k]),
         "petersson_peak": PETERSSON_PEAK,
-        "largest_jump_at_insertion": float(jumps[inserted].max() / load[k]) if inserted.any() else 0.0,
-        "pad_minus_supports": float(np.abs(load - support)[load > 0.5 * load[k]].max() / load[k]),
+        "largest_change_at_insertion": change_at / mean[k],
+        "largest_change_elsewhere": change_else / mean[k],
+        "pad_minus_supports": float(np.abs(load - support)[load > 0.5 * mean[k]].max() / mean[k]),
         "cracks": float(cracks[-1]),
         "work": work,
         "steps": float(sim.steps),
@@ -191,6 +201,24 @@ def main(
     if out is not None:
         write(Path(out), data, summary)
     return summary
+
+
+def _changes(load: np.ndarray, cracks: np.ndarray, window: int = 10) -> tuple[float, float]:
+    """The largest change of the load across a sample at which cracks were
+    inserted, as the mean of the ``window`` samples after it less that of
+    the ``window`` before (1 ms each: the wave an insertion sends and its
+    ringing included, the ringing's own swing averaged out); and the
+    largest such change across the other samples (the loading's own trend
+    and the ringing left: the floor of this measure)."""
+    total = np.concatenate([[0.0], np.cumsum(load)])
+    at, elsewhere = 0.0, 0.0
+    for i in range(window, len(load) - window):
+        change = abs((total[i + window] - total[i]) - (total[i] - total[i - window])) / window
+        if cracks[i] > cracks[i - 1]:
+            at = max(at, change)
+        else:
+            elsewhere = max(elsewhere, change)
+    return float(at), float(elsewhere)
 
 
 def write(out: Path, data: np.ndarray, summary: dict[str, float]) -> None:

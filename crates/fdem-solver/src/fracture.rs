@@ -336,10 +336,10 @@ impl Simulation {
                     }
                 }
             }
-            // a node cut in two: its one bond takes over the force the
-            // elements carried through the node (below)
-            if fr.bonds.len() == first + 1 {
-                preload.push(first);
+            // the family's new bonds take over the force the elements
+            // carried through the node (below)
+            if fr.bonds.len() > first {
+                preload.push((first..fr.bonds.len(), f.clone()));
             }
         }
         self.fracture = Some(fr);
@@ -361,22 +361,28 @@ impl Simulation {
         true
     }
 
-    /// Gives each bond listed (indices into the bond list, made in this
-    /// check) the opening at which it carries, at the positions of the
-    /// insertion, the force the elements carried through the node it
-    /// splits: time continuity of the traction across a crack inserted
-    /// early (Papoulia, Sam & Vavasis 2003). Without it a bond starts
-    /// slack, every insertion drops a node's share of `f_t (1 − F̄)` at
-    /// once, and the stress wave that follows swung the reaction of a
-    /// notched beam by ±20% of its load (docs/fracture.md). The pull is
-    /// the antisymmetric part `(g_v − g_u) / 2` of the elements' forces
-    /// `g` on the two copies (the bond's forces are equal and opposite, so
-    /// momentum is kept); none where the elements press the copies
-    /// together (contact carries that), and at most the bond's strength:
-    /// the offset stays within its elastic range, so no damage starts at
-    /// insertion. The elastic energy it holds then is booked with the
-    /// rest of the insertion's change of held energy (`resurfacing`).
-    fn preload_bonds(&mut self, which: &[usize]) {
+    /// Gives the new bonds of each split node (`which`: their indices in
+    /// the bond list, and the node's copies) the openings at which, at the
+    /// positions of the insertion, they carry the force the elements
+    /// carried through the node: time continuity of the traction across a
+    /// crack inserted early (Papoulia, Sam & Vavasis 2003). Without it a
+    /// bond starts slack, every insertion drops a node's share of
+    /// `f_t (1 − F̄)` at once, and the stress wave that follows swung the
+    /// reaction of a notched beam by ±20% of its load (docs/fracture.md).
+    ///
+    /// Each copy `c` feels `g_c`: its elements' forces and those of the
+    /// bonds it already has. The new bonds' forces `F_j` (on `v_j`, minus
+    /// that on `u_j`) are the least-norm ones that cancel them: with `B`
+    /// the bonds' incidence matrix, `F = B φ` where `Bᵀ B φ = −(g − ḡ)`,
+    /// `ḡ` the mean over the copies a bond chain joins (so the bonds' forces
+    /// are equal and opposite and momentum is kept; for a node cut in two,
+    /// `F = (g_u − g_v)/2`). A bond that would push its copies together
+    /// gets none (contact carries that), and none gets more than its
+    /// strength: its offset stays within the elastic range, so no damage
+    /// starts at insertion. The elastic energy the bonds hold then is
+    /// booked with the rest of the insertion's change of held energy
+    /// (`resurfacing`).
+    fn preload_bonds(&mut self, which: &[(std::ops::Range<usize>, Vec<u32>)]) {
         let Some(fr) = &mut self.fracture else { return };
         let (x, conn, force, node_elems) = (&self.nodes.x, &self.elems.conn, &self.elems.force, &self.node_elems);
         // the elements' force on a node, and the centroid of its elements
@@ -392,23 +398,45 @@ impl Simulation {
             }
             (g, [c[0] / n.max(1.0), c[1] / n.max(1.0)])
         };
-        for &k in which {
-            let bond = &mut fr.bonds[k];
-            let [u, v] = bond.nodes;
-            let ((gu, cu), (gv, cv)) = (pull(u), pull(v));
-            let kl = bond.stiffness * bond.length;
-            if kl.is_nan() || kl <= 0.0 {
-                continue;
+        for (range, copies) in which {
+            let m = copies.len();
+            let at = |p: u32| copies.iter().position(|&c| c == p);
+            let (mut g, centre): (Vec<Vec2>, Vec<Vec2>) = copies.iter().map(|&c| pull(c)).unzip();
+            // the bonds the copies already have pull on them too
+            for (k, bond) in fr.bonds.iter().enumerate() {
+                if range.contains(&k) {
+                    continue;
+                }
+                let [a, b] = bond.nodes;
+                let f = bond.force(x[a as usize], x[b as usize]);
+                if let Some(i) = at(b) {
+                    g[i] = [g[i][0] + f[0], g[i][1] + f[1]];
+                }
+                if let Some(i) = at(a) {
+                    g[i] = [g[i][0] - f[0], g[i][1] - f[1]];
+                }
             }
-            let o = [0.5 * (gv[0] - gu[0]) / kl, 0.5 * (gv[1] - gu[1]) / kl];
-            // from u's side of the crack to v's: the copies are pulled apart
-            let across = [cv[0] - cu[0], cv[1] - cu[1]];
-            if o[0] * across[0] + o[1] * across[1] <= 0.0 {
-                continue;
+            let edges: Vec<(usize, usize)> = fr.bonds[range.clone()]
+                .iter()
+                .filter_map(|b| Some((at(b.nodes[0])?, at(b.nodes[1])?)))
+                .collect();
+            let Some(phi) = laplacian_potential(m, &edges, &g) else { continue };
+            for (bond, &(u, v)) in fr.bonds[range.clone()].iter_mut().zip(&edges) {
+                let kl = bond.stiffness * bond.length;
+                if kl.is_nan() || kl <= 0.0 {
+                    continue;
+                }
+                let f = [phi[v][0] - phi[u][0], phi[v][1] - phi[u][1]];
+                let o = [-f[0] / kl, -f[1] / kl];
+                // from u's side of the crack to v's: the copies are pulled apart
+                let across = [centre[v][0] - centre[u][0], centre[v][1] - centre[u][1]];
+                if o[0] * across[0] + o[1] * across[1] <= 0.0 {
+                    continue;
+                }
+                let size = (o[0] * o[0] + o[1] * o[1]).sqrt();
+                let cap = (bond.elastic_limit() / size).min(1.0);
+                bond.offset = [o[0] * cap, o[1] * cap];
             }
-            let size = (o[0] * o[0] + o[1] * o[1]).sqrt();
-            let cap = (bond.elastic_limit() / size).min(1.0);
-            bond.offset = [o[0] * cap, o[1] * cap];
         }
     }
 
@@ -656,8 +684,125 @@ impl Simulation {
     }
 }
 
+/// The least-norm potentials `φ` (one 2-vector per node of a small graph
+/// of `m` nodes and `edges` `(u, v)`) with `Bᵀ B φ = −(g − ḡ)`, `B` the
+/// edges' incidence matrix (`+1` at `v`, `−1` at `u`) and `ḡ` the mean of
+/// `g` over each connected part: the edge forces `φ_v − φ_u` then cancel
+/// `g` as far as forces within each part can. `None` if an edge names a
+/// node beyond `m`. Dense Gaussian elimination: the graphs are the copies
+/// of one split node (two to a handful).
+fn laplacian_potential(m: usize, edges: &[(usize, usize)], g: &[Vec2]) -> Option<Vec<Vec2>> {
+    if edges.iter().any(|&(u, v)| u >= m || v >= m || u == v) {
+        return None;
+    }
+    // connected parts (the graphs are tiny: relabel until stable)
+    let mut part: Vec<usize> = (0..m).collect();
+    loop {
+        let mut changed = false;
+        for &(u, v) in edges {
+            let low = part[u].min(part[v]);
+            for w in [u, v] {
+                if part[w] != low {
+                    part[w] = low;
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    // right-hand side with each part's mean taken out
+    let mut rhs = vec![[0.0; 2]; m];
+    for p in 0..m {
+        let members: Vec<usize> = (0..m).filter(|&i| part[i] == part[p]).collect();
+        let n = members.len() as f64;
+        let mean = members.iter().fold([0.0; 2], |a, &i| [a[0] + g[i][0] / n, a[1] + g[i][1] / n]);
+        rhs[p] = [-(g[p][0] - mean[0]), -(g[p][1] - mean[1])];
+    }
+    // the Laplacian, each part's first node pinned (φ = 0 there)
+    let mut a = vec![vec![0.0_f64; m]; m];
+    for &(u, v) in edges {
+        a[u][u] += 1.0;
+        a[v][v] += 1.0;
+        a[u][v] -= 1.0;
+        a[v][u] -= 1.0;
+    }
+    for p in 0..m {
+        if part[p] == p {
+            a[p].iter_mut().for_each(|e| *e = 0.0);
+            for row in a.iter_mut() {
+                row[p] = 0.0;
+            }
+            a[p][p] = 1.0;
+            rhs[p] = [0.0; 2];
+        }
+    }
+    // symmetric positive definite: elimination without pivoting
+    for c in 0..m {
+        let pivot = a[c][c];
+        if pivot.abs() < 1e-300 {
+            return None;
+        }
+        for r in c + 1..m {
+            let f = a[r][c] / pivot;
+            if f != 0.0 {
+                for k in c..m {
+                    a[r][k] -= f * a[c][k];
+                }
+                rhs[r] = [rhs[r][0] - f * rhs[c][0], rhs[r][1] - f * rhs[c][1]];
+            }
+        }
+    }
+    let mut phi = vec![[0.0; 2]; m];
+    for r in (0..m).rev() {
+        let mut s = rhs[r];
+        for k in r + 1..m {
+            s = [s[0] - a[r][k] * phi[k][0], s[1] - a[r][k] * phi[k][1]];
+        }
+        phi[r] = [s[0] / a[r][r], s[1] / a[r][r]];
+    }
+    Some(phi)
+}
+
 #[cfg(test)]
 mod tests {
+    /// The bonds' forces `φ_v − φ_u` cancel every copy's pull `g` (less
+    /// its part's mean) and are the least-norm such forces: `(g_u − g_v)/2`
+    /// for a node cut in two; on a chain of three, exact; on a triangle,
+    /// the force splits between the two paths.
+    #[test]
+    fn bond_forces_cancel_the_pull_on_every_copy() {
+        let net = |edges: &[(usize, usize)], phi: &[[f64; 2]], m: usize| {
+            let mut out = vec![[0.0; 2]; m];
+            for &(u, v) in edges {
+                let f = [phi[v][0] - phi[u][0], phi[v][1] - phi[u][1]];
+                out[v] = [out[v][0] + f[0], out[v][1] + f[1]];
+                out[u] = [out[u][0] - f[0], out[u][1] - f[1]];
+            }
+            out
+        };
+        let cases: [(&[(usize, usize)], Vec<[f64; 2]>); 3] = [
+            (&[(0, 1)], vec![[-3.0, 1.0], [3.0, -1.0]]),
+            (&[(0, 1), (1, 2)], vec![[-2.0, 0.5], [0.5, 1.0], [1.5, -1.5]]),
+            (&[(0, 1), (1, 2), (0, 2)], vec![[-2.0, 0.0], [1.0, 1.0], [1.0, -1.0]]),
+        ];
+        for (edges, g) in cases {
+            let m = g.len();
+            let phi = super::laplacian_potential(m, edges, &g).unwrap();
+            for (c, f) in net(edges, &phi, m).iter().enumerate() {
+                assert!((f[0] + g[c][0]).abs() < 1e-12 && (f[1] + g[c][1]).abs() < 1e-12, "copy {c}: {f:?}");
+            }
+        }
+        let phi = super::laplacian_potential(2, &[(0, 1)], &[[-3.0, 1.0], [3.0, -1.0]]).unwrap();
+        assert_eq!([phi[1][0] - phi[0][0], phi[1][1] - phi[0][1]], [-3.0, 1.0]);
+        // a pull that the bonds cannot balance (net force on the part) is
+        // left to the copies' inertia: only its mean-free part is cancelled
+        let phi = super::laplacian_potential(2, &[(0, 1)], &[[1.0, 0.0], [1.0, 0.0]]).unwrap();
+        assert_eq!(phi[1], phi[0]);
+        assert!(super::laplacian_potential(2, &[(0, 2)], &[[0.0; 2]; 2]).is_none());
+    }
+
     use crate::model::{ContactSpec, FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec};
     use crate::simulation::Simulation;
     use fdem_fracture::FractureParams;
