@@ -416,10 +416,10 @@ impl Simulation {
                     g[i] = [g[i][0] - f[0], g[i][1] - f[1]];
                 }
             }
-            let edges: Vec<(usize, usize)> = fr.bonds[range.clone()]
-                .iter()
-                .filter_map(|b| Some((at(b.nodes[0])?, at(b.nodes[1])?)))
-                .collect();
+            // the family's bonds join its copies (they were made between them)
+            let edges: Option<Vec<(usize, usize)>> =
+                fr.bonds[range.clone()].iter().map(|b| Some((at(b.nodes[0])?, at(b.nodes[1])?))).collect();
+            let Some(edges) = edges else { continue };
             let Some(phi) = laplacian_potential(m, &edges, &g) else { continue };
             for (bond, &(u, v)) in fr.bonds[range.clone()].iter_mut().zip(&edges) {
                 let kl = bond.stiffness * bond.length;
@@ -782,7 +782,8 @@ mod tests {
             }
             out
         };
-        let cases: [(&[(usize, usize)], Vec<[f64; 2]>); 3] = [
+        type Case<'a> = (&'a [(usize, usize)], Vec<[f64; 2]>);
+        let cases: [Case<'_>; 3] = [
             (&[(0, 1)], vec![[-3.0, 1.0], [3.0, -1.0]]),
             (&[(0, 1), (1, 2)], vec![[-2.0, 0.5], [0.5, 1.0], [1.5, -1.5]]),
             (&[(0, 1), (1, 2), (0, 2)], vec![[-2.0, 0.0], [1.0, 1.0], [1.0, -1.0]]),
