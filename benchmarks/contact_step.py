@@ -4,7 +4,7 @@ block under gravity and 15.2 MPa on top, contact on every joint face.
 Reports element-updates per second, candidate pairs evaluated per second,
 broad-phase builds, and the share of step time spent in each phase.
 
-Run: python benchmarks/contact_step.py [--size 0.85] [--threads 1 2] [--steps 300]
+Run: python benchmarks/contact_step.py [--size 0.85] [--threads 1 2 4 8 16] [--steps 300]
 """
 
 from __future__ import annotations
@@ -48,8 +48,10 @@ def main() -> None:
     print(f"fdem {fdem.__version__}, {platform.machine()}, {os.cpu_count()} cores; model built in {built:.1f} s")
     m = model.mesh
     print(f"{m.n_elements} elements, {len(m.facet_sets['joints'])} joint faces")
-    header = ["threads:7", "updates/s:10", "pairs/s:10", "builds:6", "nodes:6", "elements:8", "broad:6", "narrow+p:8"]
+    header = ["threads:7", "updates/s:10", "E(n):5", "pairs/s:10", "builds:6"]
+    header += ["nodes:6", "elements:8", "broad:6", "narrow+p:8"]
     print(" ".join(f"{h.split(':')[0]:>{int(h.split(':')[1])}}" for h in header), f"{'dt':>5}")
+    base: tuple[float, int] | None = None
     for threads in args.threads:
         sim = fdem.Simulation(model, threads=threads, mass_damping=20.0)
         sim.step(20)
@@ -60,8 +62,11 @@ def main() -> None:
         p1, s1 = sim.phase_times(), sim.contact_stats()
         share = {k: (p1[k] - p0[k]) / wall for k in p1}
         pairs = s1["pairs_evaluated"] - s0["pairs_evaluated"]
+        rate = m.n_elements * args.steps / wall
+        base = base or (rate, threads)
+        eff = (rate / base[0]) * base[1] / threads  # against the first thread count listed
         print(
-            f"{threads:>7} {m.n_elements * args.steps / wall:>10.3e} {pairs / wall:>10.3e} "
+            f"{threads:>7} {rate:>10.3e} {eff:>5.2f} {pairs / wall:>10.3e} "
             f"{s1['broad_phase_builds'] - s0['broad_phase_builds']:>6} "
             f"{share['nodes']:>6.1%} {share['elements']:>8.1%} "
             f"{share['broad_phase']:>6.1%} {share['surface']:>8.1%} {share['time_step']:>5.1%}",

@@ -5,7 +5,7 @@ Every node follows a uniform compressive velocity field from a stress
 already on the Mohr–Coulomb plateau, so every element returns to the yield
 surface on every step (checked: every element's plastic strain grows).
 
-Run: python benchmarks/plastic_step.py [--sizes 1e5] [--threads 1 2]
+Run: python benchmarks/plastic_step.py [--sizes 1e5] [--threads 1 2 4 8 16]
 """
 
 from __future__ import annotations
@@ -69,15 +69,18 @@ def main() -> None:
     print(f"fdem {fdem.__version__}, {platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}")
     print(
         f"{'elements':>10} {'threads':>7} {'updates/s (wall)':>17} {'per thread':>11} "
-        f"{'updates/CPU-s':>14} {'plastic':>8}"
+        f"{'updates/CPU-s':>14} {'plastic':>8} {'E(n)':>6}"
     )
     for size in args.sizes:
         model = build(size)
+        base: tuple[float, int] | None = None
         for t in args.threads:
             wall_rate, cpu_rate, plastic = measure(model, t, args.seconds, args.repeats)
+            base = base or (wall_rate, t)
+            eff = (wall_rate / base[0]) * base[1] / t  # against the first thread count listed
             print(
                 f"{model.mesh.n_elements:>10d} {t:>7d} {wall_rate:>17.3e} {wall_rate / t:>11.3e} "
-                f"{cpu_rate:>14.3e} {plastic:>8.0%}",
+                f"{cpu_rate:>14.3e} {plastic:>8.0%} {eff:>6.2f}",
                 flush=True,
             )
 
