@@ -28,7 +28,7 @@ from .errors import (
     PlausibilityWarning,
     SimulationError,
 )
-from .joints import JointSet, jointed_rectangle
+from .joints import JointSet, clean_traces, jointed_rectangle
 from .laboratory import MaterialPointResult, material_point
 from .materials import Elastic, MohrCoulombRankine
 from .mesh import Mesh, gmsh_rectangle
@@ -56,6 +56,7 @@ __all__ = [
     "SimulationError",
     "VtuSeries",
     "__version__",
+    "clean_traces",
     "errors",
     "gmsh_rectangle",
     "jointed_rectangle",

@@ -8,12 +8,16 @@ random perturbation with a seed. :func:`jointed_rectangle` meshes a
 rectangle so that the mesh conforms to every trace (crossings included) and
 duplicates the nodes along each trace, so that each is an open contact
 interface; the facet set ``joints`` (and one per set name) holds its faces.
+The same opening works on any mesh that conforms to interior lines, e.g.
+gmsh physical lines (:meth:`Mesh.open_joints`, ``Mesh.read(path,
+joints=[...])``); :func:`clean_traces` keeps slivers out of the traces a
+mesher is given.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,10 +25,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import _core
-from ._checks import float_array, number, positive
+from ._checks import float_array, index_array, number, positive
 from .mesh import Mesh
 
-__all__ = ["JointSet", "jointed_rectangle"]
+__all__ = ["JointSet", "clean_traces", "jointed_rectangle"]
 
 
 @dataclass(frozen=True)
@@ -407,3 +411,142 @@ def jointed_rectangle(
         facet_sets[side] = bf[(np.abs(bp[:, 0, axis] - value) < tol) & (np.abs(bp[:, 1, axis] - value) < tol)]
     # renumbered along a Hilbert curve: neighbours near each other in memory
     return mesh.with_sets(facet_sets=facet_sets).reordered()
+
+
+def clean_traces(
+    traces: Any,
+    bounds: tuple[float, float, float, float],
+    tol: float,
+    *,
+    labels: Any = None,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Traces made fit to mesh: no rock thinner than ``tol`` left between a
+    trace end and another set's trace or the rectangle's sides, and crossings
+    made explicit.
+
+    A trace that stops a little short of another set's trace or of the
+    domain side leaves a sliver of rock the mesher must fill with elements
+    of that thickness, and one sliver sets the stable step of the whole
+    explicit run (docs/meshing.md). This moves each such end onto what it
+    nearly meets (extending or trimming the trace along itself), then splits
+    traces at their crossings so that a crossing is one shared point.
+    :func:`jointed_rectangle` does the same before it meshes; call this on
+    traces you give to gmsh yourself.
+
+    Parameters
+    ----------
+    traces : array_like, shape (k, 2, 2)
+        Segments ``[[x0, y0], [x1, y1]]`` (m).
+    bounds : (xmin, ymin, xmax, ymax)
+        The domain's rectangle (m); ends within ``tol`` of a side go onto it.
+    tol : float
+        The thinnest rock to keep (m), e.g. half the element size near the
+        traces.
+    labels : array_like of int, shape (k,), optional
+        The set of each trace (ends snap only onto traces of another set);
+        default all in one set.
+
+    Returns
+    -------
+    traces : ndarray, shape (m, 2, 2)
+        The cleaned pieces (crossings split them).
+    labels : ndarray of int, shape (m,)
+        The set of each piece.
+    """
+    t = float_array("traces", traces, (None, 2, 2))
+    lab = np.zeros(len(t), dtype=np.int64) if labels is None else np.asarray(labels, dtype=np.int64)
+    if lab.shape != (len(t),):
+        raise ValueError(f"labels: expected shape ({len(t)},), got {lab.shape}")
+    d = positive("tol", tol)
+    short = np.flatnonzero(np.linalg.norm(t[:, 1] - t[:, 0], axis=1) <= d)
+    if len(short):
+        raise ValueError(f"trace {int(short[0])} is no longer than tol = {d:g} m; drop it or lower tol")
+    b = tuple(float(v) for v in bounds)
+    if len(b) != 4 or not (b[0] < b[2] and b[1] < b[3]):
+        raise ValueError(f"bounds {bounds} must be (xmin, ymin, xmax, ymax) with xmin < xmax and ymin < ymax")
+    t = _snap(t, lab, b, d)  # type: ignore[arg-type]
+    return _planarize(t, lab, b, 1e-6 * d)  # type: ignore[arg-type]
+
+
+def _open_joints(mesh: Mesh, lines: Mapping[str, Any], sliver: float) -> Mesh:
+    """Implementation of :meth:`Mesh.open_joints` (kept beside the other
+    joint machinery; the mesh module imports it lazily)."""
+    if not isinstance(lines, Mapping) or not lines:
+        raise ValueError("joints: give a mapping of joint name to (k, 2) node pairs, at least one")
+    frac = number("sliver", sliver)
+    if not 0 <= frac < 1:
+        raise ValueError(f"sliver = {frac} must lie in [0, 1) (a fraction of the longest edge of an element)")
+    n0, tri = mesh.n_nodes, mesh.triangles
+    edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    keys, counts = np.unique(edges, axis=0, return_counts=True)
+    uses = {(int(a), int(b)): int(c) for (a, b), c in zip(keys, counts, strict=True)}
+    owner: dict[tuple[int, int], str] = {}
+    for name, value in lines.items():
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"joint names must be non-empty strings, got {name!r}")
+        if name in mesh.facet_sets:
+            raise ValueError(f"joint '{name}': the mesh already has a facet set of that name")
+        f = index_array(f"joint '{name}'", value, (None, 2), n0)
+        if len(f) == 0:
+            raise ValueError(f"joint '{name}' has no edges")
+        for i, (a, b) in enumerate(f.tolist()):
+            key = (min(a, b), max(a, b))
+            if key not in uses:
+                raise ValueError(
+                    f"joint '{name}': entry {i} ({a}, {b}) is not an edge of the mesh; the mesh must conform "
+                    "to the joint (embed the line in the gmsh surface)"
+                )
+            if uses[key] == 1:
+                raise ValueError(
+                    f"joint '{name}': entry {i} ({a}, {b}) lies on the mesh boundary; a joint runs inside the "
+                    "body (a boundary line is a facet set: leave it out of joints)"
+                )
+            if key in owner and owner[key] != name:
+                raise ValueError(f"joint '{name}': edge ({a}, {b}) also belongs to joint '{owner[key]}'")
+            owner[key] = name
+    cut = np.array(sorted(owner), dtype=np.int64)
+    on_trace = np.zeros(n0, dtype=bool)
+    on_trace[cut.ravel()] = True
+    # a sliver beside a trace: refused, not repaired. Collapsing it would
+    # move the trace or its neighbours; the fix that keeps the geometry is
+    # upstream, in the traces the mesher was given (clean_traces).
+    near = np.flatnonzero(on_trace[tri].any(axis=1))
+    p = mesh.points[tri[near]]
+    longest = np.linalg.norm(p - np.roll(p, -1, axis=1), axis=2).max(axis=1)
+    altitude = mesh.min_altitudes()[near]
+    bad = np.flatnonzero(altitude < frac * longest)
+    if len(bad):
+        k = bad[np.argmin(altitude[bad] / longest[bad])]
+        e = int(near[k])
+        touched = sorted({owner[key] for key in owner if set(key) & set(tri[e].tolist())})
+        raise ValueError(
+            f"element {e} beside joint {', '.join(repr(s) for s in touched) or '?'} is a sliver: smallest "
+            f"altitude {altitude[k]:.3g} m against its longest edge {longest[k]:.3g} m (below sliver = {frac:g}; "
+            f"{len(bad)} such elements). Its step would govern the whole run; snap the trace ends that "
+            "nearly meet another trace or the boundary (fdem.clean_traces) and mesh again"
+        )
+    new_tri, parents = _core.split_along_edges(n0, np.ascontiguousarray(tri), cut)
+    origin_of = np.concatenate([np.arange(n0), parents])
+    points = mesh.points[origin_of]
+    iface = np.concatenate([mesh.interface_nodes, np.ones(len(parents), dtype=bool)])
+    iface[parents] = True
+    opened = Mesh(points, new_tri, interface_nodes=iface)
+    bf = opened.boundary_facets()
+    by_origin: dict[tuple[int, int], list[int]] = {}
+    for i, (a, b) in enumerate(np.sort(origin_of[bf], axis=1).tolist()):
+        by_origin.setdefault((a, b), []).append(i)
+    facet_sets: dict[str, Any] = {}
+    for name, f in mesh.facet_sets.items():
+        facet_sets[name] = bf[[by_origin[(min(a, b), max(a, b))][0] for a, b in f.tolist()]]
+    for name in lines:
+        rows = [i for key, n in owner.items() if n == name for i in by_origin[key]]
+        facet_sets[name] = bf[np.sort(rows)]
+    node_sets = {k: np.flatnonzero(np.isin(origin_of, v)) for k, v in mesh.node_sets.items()}
+    return Mesh(
+        points,
+        new_tri,
+        node_sets=node_sets,
+        facet_sets=facet_sets,
+        element_sets=dict(mesh.element_sets),
+        interface_nodes=iface,
+    )

@@ -100,7 +100,10 @@ class Mesh:
             f = index_array(f"facet set '{k}'", v, (None, 2), n)
             for i, (a, b) in enumerate(f.tolist()):
                 if (min(a, b), max(a, b)) not in boundary:
-                    raise ValueError(f"facet set '{k}': entry {i} ({a}, {b}) is not an edge on the mesh boundary")
+                    raise ValueError(
+                        f"facet set '{k}': entry {i} ({a}, {b}) is not an edge on the mesh boundary "
+                        "(an interior line is a joint: open it with Mesh.open_joints or Mesh.read(..., joints=))"
+                    )
             fsets[str(k)] = _frozen(f)
         self._facet_sets = MappingProxyType(fsets)
 
@@ -256,6 +259,49 @@ class Mesh:
             element_sets=merged["element"],
             interface_nodes=iface,
         )
+
+    def open_joints(self, lines: Mapping[str, Any], *, sliver: float = 0.2) -> Mesh:
+        """A copy with interior lines opened into joints: contact interfaces,
+        each with the name of its line, for its own law in
+        :meth:`fdem.Model.contact` (``interfaces={name: Interface(...)}``).
+
+        Every node on a line is split into one copy per sector of rock around
+        it (the machinery of :func:`fdem.jointed_rectangle`): two along a
+        line, one per sector where lines cross or meet, two where a line
+        reaches the outer boundary; the end of a line inside the body (a
+        crack tip) stays one node, so the joint closes there. Copies are
+        marked as interface nodes. Element ids do not change; new nodes are
+        appended after the old ones.
+
+        Parameters
+        ----------
+        lines : mapping of str to array_like of int, shape (k, 2)
+            For each joint name, the mesh edges (node pairs, any order and
+            orientation) along its traces. The mesh must conform to them.
+        sliver : float
+            An element with a node on a line whose smallest altitude is below
+            this fraction of its longest edge is refused (0 turns the check
+            off). Its stable step would govern the whole run; the fix is in
+            the geometry given to the mesher (:func:`fdem.clean_traces`).
+
+        Returns
+        -------
+        Mesh
+            With a facet set per joint holding both faces of its line; the
+            other facet sets follow the split (each boundary edge once,
+            oriented with the body on its left); a node set holds every copy
+            of its nodes; element sets are unchanged.
+
+        Raises
+        ------
+        ValueError
+            Naming the joint and entry for an edge that is not in the mesh, on
+            its boundary or in two joints, a name already used by a facet set,
+            and the element for a sliver.
+        """
+        from .joints import _open_joints
+
+        return _open_joints(self, lines, sliver)
 
     # --- derived ----------------------------------------------------------
     def nodes(self, group: str | Any) -> NDArray[np.int64]:
@@ -457,7 +503,7 @@ class Mesh:
         return cls.polygon(np.column_stack([center[0] + r * np.cos(a), center[1] + r * np.sin(a)]), s)
 
     @classmethod
-    def read(cls, path: str | os.PathLike[str]) -> Mesh:
+    def read(cls, path: str | os.PathLike[str], *, joints: Sequence[str] = (), sliver: float = 0.2) -> Mesh:
         """Reads a triangle mesh with meshio (gmsh ``.msh``, ``.vtu``, …).
 
         Named groups come from the file's cell sets (gmsh physical groups):
@@ -465,6 +511,23 @@ class Mesh:
         cells node sets. A z coordinate must be zero. Nodes no triangle uses
         (gmsh geometry points) are dropped and the rest renumbered; clockwise
         triangles are turned counter-clockwise.
+
+        Parameters
+        ----------
+        path : str or path
+            The file.
+        joints : sequence of str
+            Names of line groups inside the body (gmsh physical lines
+            embedded in the surface) to open into joints, each a contact
+            interface of that name (:meth:`open_joints`). A line group not
+            named here must lie on the boundary.
+        sliver : float
+            The sliver check of :meth:`open_joints`.
+
+        Examples
+        --------
+        >>> mesh = fdem.Mesh.read("tunnel.msh", joints=["set_a", "set_b"])  # doctest: +SKIP
+        >>> model.contact(Interface(), interfaces={"set_a": Interface(friction=30)})  # doctest: +SKIP
         """
         import meshio
 
@@ -515,13 +578,22 @@ class Mesh:
                     facet_sets.setdefault(name, []).append(renum[block.data[idx]])
                 elif block.type == "vertex":
                     node_sets.setdefault(name, []).append(renum[block.data[idx].ravel()])
-        return cls(
+        if isinstance(joints, str):
+            joints = [joints]
+        missing = [j for j in joints if j not in facet_sets]
+        if missing:
+            raise ValueError(
+                f"{path}: no line group named {missing[0]!r} to open as a joint; lines: {sorted(facet_sets)}"
+            )
+        lines = {j: np.concatenate(facet_sets.pop(j)) for j in joints}
+        mesh = cls(
             pts,
             tri,
             node_sets={k: np.concatenate(v) for k, v in node_sets.items()},
             facet_sets={k: np.concatenate(v) for k, v in facet_sets.items()},
             element_sets={k: np.concatenate(v) for k, v in element_sets.items()},
         )
+        return mesh.open_joints(lines, sliver=sliver) if lines else mesh
 
 
 def _hilbert_key(points: NDArray[np.float64], bits: int = 16) -> NDArray[np.uint64]:
