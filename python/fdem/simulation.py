@@ -50,6 +50,15 @@ class Simulation:
         Mass-proportional damping ``α`` (1/s).
     stiffness_damping : float
         Stiffness-proportional (element viscous) damping ``β`` (s).
+    local_damping : float
+        Local (non-viscous) damping ``α_L`` in [0, 1), as in FLAC and UDEC
+        (Cundall 1987): each free velocity component of a node feels
+        ``−α_L |f| sign(v)`` on top of its net force ``f``. It damps what
+        accelerates, not steady motion, and a linear oscillator keeps
+        ``√((1 − α_L)/(1 + α_L))`` of its amplitude every half cycle at
+        any frequency (1/3 at FLAC's 0.8 for statics). For equilibrium and
+        excavation stages; 0 (off) by default; its work is booked as
+        ``damping`` in :meth:`energies`.
     dt_interval : int
         Steps between re-evaluations of the automatic stable step.
     energy_growth : float
@@ -104,6 +113,7 @@ class Simulation:
         energy_growth: float = 0.05,
         mass_scaling: float | None = None,
         renumber: float | None = None,
+        local_damping: float = 0.0,
     ) -> None:
         if not isinstance(model, Model):
             raise ValueError(f"model must be a fdem.Model, got {type(model).__name__}")
@@ -111,7 +121,15 @@ class Simulation:
             threads = whole("threads", threads, maximum=4096)
         self.model = model
         self._settings = self._check_settings(
-            safety, dt, mass_damping, stiffness_damping, dt_interval, energy_growth, mass_scaling, renumber
+            safety,
+            dt,
+            mass_damping,
+            stiffness_damping,
+            dt_interval,
+            energy_growth,
+            mass_scaling,
+            renumber,
+            local_damping,
         )
         arrays = model.kernel_arrays()
         self._fingerprint = _fingerprint(arrays)
@@ -148,12 +166,24 @@ class Simulation:
 
     @staticmethod
     def _check_settings(
-        safety: Any, dt: Any, alpha: Any, beta: Any, interval: Any, growth: Any, scaling: Any, renumber: Any
+        safety: Any,
+        dt: Any,
+        alpha: Any,
+        beta: Any,
+        interval: Any,
+        growth: Any,
+        scaling: Any,
+        renumber: Any,
+        local: Any = 0.0,
     ) -> dict[str, Any]:
         s = number("safety", safety)
         if not 0 < s <= 1:
             raise ValueError(f"safety = {s} must lie in (0, 1]")
+        a_local = number("local_damping", local)
+        if not 0 <= a_local < 1:
+            raise ValueError(f"local_damping = {a_local} must lie in [0, 1) (FLAC's default for statics is 0.8)")
         return {
+            "local_damping": a_local,
             "safety": s,
             "fixed_dt": None if dt is None else positive("dt", dt),
             "mass_damping": positive("mass_damping", alpha, allow_zero=True),
@@ -166,7 +196,7 @@ class Simulation:
 
     def configure(self, **changes: Any) -> Simulation:
         """Changes run settings between stages (``safety``, ``dt``,
-        ``mass_damping``, ``stiffness_damping``, ``dt_interval``,
+        ``mass_damping``, ``stiffness_damping``, ``local_damping``, ``dt_interval``,
         ``energy_growth``, ``mass_scaling``, ``renumber``,
         ``check_every``). Turning mass scaling on, or raising its step,
         scales masses at once; turning it off keeps the
@@ -178,6 +208,7 @@ class Simulation:
             "dt",
             "mass_damping",
             "stiffness_damping",
+            "local_damping",
             "dt_interval",
             "energy_growth",
             "mass_scaling",
@@ -206,6 +237,7 @@ class Simulation:
                 cur["energy_growth"],
                 cur["mass_scaling"],
                 cur["renumber"],
+                cur.get("local_damping", 0.0),
             )
         # everything checked before anything changes
         if steps is not None:
@@ -692,7 +724,7 @@ class Simulation:
         self.model = model
         # older checkpoints' run descriptions predate mass scaling and
         # renumbering
-        self._settings = {"mass_scaling": None, "renumber": None, **settings}
+        self._settings = {"mass_scaling": None, "renumber": None, "local_damping": 0.0, **settings}
         self._fingerprint = mine
         self._core = core
         self._series = {}

@@ -187,7 +187,7 @@ impl PySimulation {
         contact_laws=None, contact_facets=None, contact_facet_laws=None, crack_law=0, contact_margin=None,
         fracture_interval=0, fracture_edge_tolerance=15.0, fracture_crack_tolerance=30.0, fracture_min_quality=0.2, fracture_min_altitude=0.0, fracture_insert_at=0.02,
         stage_times=Vec::new(), stage_elements=Vec::new(),
-        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.05, mass_scaling=None, renumber=None, threads=0
+        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.05, mass_scaling=None, renumber=None, threads=0, local_damping=0.0
     ))]
     fn new(
         points: PyReadonlyArray2<'_, f64>,
@@ -228,6 +228,7 @@ impl PySimulation {
         mass_scaling: Option<f64>,
         renumber: Option<f64>,
         threads: usize,
+        local_damping: f64,
     ) -> PyResult<Self> {
         guard(|| {
             let points = rows::<2>("points", &points)?;
@@ -371,6 +372,7 @@ impl PySimulation {
                     energy_growth,
                     mass_scaling,
                     renumber,
+                    local_damping,
                 },
             };
             let sim = fdem_solver::Simulation::new(spec, threads).map_err(|e| value_error(e.to_string()))?;
@@ -477,7 +479,7 @@ impl PySimulation {
     }
 
     /// Replaces the run settings between stages.
-    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth=0.05, mass_scaling=None, renumber=None))]
+    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth=0.05, mass_scaling=None, renumber=None, local_damping=0.0))]
     #[allow(clippy::too_many_arguments)]
     fn set_settings(
         &mut self,
@@ -489,6 +491,7 @@ impl PySimulation {
         energy_growth: f64,
         mass_scaling: Option<f64>,
         renumber: Option<f64>,
+        local_damping: f64,
     ) -> PyResult<()> {
         guard(|| {
             self.ok()?;
@@ -501,6 +504,7 @@ impl PySimulation {
                 energy_growth,
                 mass_scaling,
                 renumber,
+                local_damping,
             };
             self.sim.set_settings(s).map_err(|e| value_error(e.to_string()))
         })

@@ -60,7 +60,7 @@ pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
 /// an older build would continue: its arithmetic differs in the last bits).
 /// Format 6 appends [`Format6`] (the contact dashpots of the node pass),
 /// format 7 then [`Format7`] (the elements' lineage), format 8 then
-/// [`Format8`] (the bonds' offsets).
+/// [`Format8`] (the bonds' offsets and the local damping).
 pub const FORMAT_VERSION: u32 = 8;
 const HEADER: usize = 40;
 
@@ -326,16 +326,22 @@ impl Format7 {
 /// What format 8 added, written after [`Format7`]: each bond's offset
 /// ([`Bond::offset`](fdem_contact::Bond::offset), the opening with which a
 /// bond took over the force through its node when its crack was
-/// inserted), in the order of the bonds. A file of an older format
-/// restores its bonds slack (offset zero), as they were made.
+/// inserted), in the order of the bonds, and the local damping
+/// coefficient ([`Settings::local_damping`]). A file of an older format
+/// restores its bonds slack (offset zero), as they were made, and no
+/// local damping.
 #[derive(Serialize, Deserialize)]
 struct Format8 {
     offsets: Vec<Vec2>,
+    local_damping: f64,
 }
 
 impl Format8 {
     fn of(s: &Simulation) -> Self {
-        Format8 { offsets: s.fracture.as_ref().map_or_else(Vec::new, |f| f.bonds.iter().map(|b| b.offset).collect()) }
+        Format8 {
+            offsets: s.fracture.as_ref().map_or_else(Vec::new, |f| f.bonds.iter().map(|b| b.offset).collect()),
+            local_damping: s.settings.local_damping,
+        }
     }
 }
 
@@ -455,7 +461,11 @@ impl Simulation {
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
         }
-        if let Some(Format8 { offsets }) = offsets {
+        if let Some(Format8 { offsets, local_damping }) = offsets {
+            if !(0.0..1.0).contains(&local_damping) {
+                return Err(CheckpointError::Invalid(format!("local damping {local_damping} must lie in [0, 1)")));
+            }
+            owned.settings.local_damping = local_damping;
             let bonds = owned.fracture.as_mut().map_or(&mut [][..], |f| &mut f.bonds[..]);
             if offsets.len() != bonds.len() || offsets.iter().any(|o| !(o[0].is_finite() && o[1].is_finite())) {
                 return Err(CheckpointError::Invalid("the bonds' offsets do not match the bonds".into()));

@@ -79,6 +79,18 @@ pub struct Settings {
     // written in format 4 of checkpoints (checkpoint.rs)
     #[serde(skip)]
     pub renumber: Option<f64>,
+    /// Local (non-viscous) damping coefficient `α_L`, `0 ≤ α_L < 1`, as in
+    /// FLAC and UDEC (Cundall 1987): each free velocity component of a
+    /// node feels `−α_L |f| sign(v)` on top of its net force `f` (`v` its
+    /// velocity at the half step before). It damps what moves, not rigid
+    /// motion or steady flow, and a linear oscillator loses the same
+    /// fraction of its amplitude every half cycle,
+    /// `√((1 − α_L)/(1 + α_L))`, whatever its frequency. For quasi-static
+    /// stages (equilibrium, excavation); 0 (off) by default. Its work is
+    /// booked as damping.
+    // written in format 8 of checkpoints (checkpoint.rs)
+    #[serde(skip)]
+    pub local_damping: f64,
 }
 
 impl Default for Settings {
@@ -92,6 +104,7 @@ impl Default for Settings {
             energy_growth: 0.05,
             mass_scaling: None,
             renumber: None,
+            local_damping: 0.0,
         }
     }
 }

@@ -53,6 +53,8 @@ pub(crate) struct NodeInputs<'a> {
     pub amplitude_values: &'a [f64],
     pub gravity: Vec2,
     pub alpha: f64,
+    /// Local damping coefficient `α_L` ([`Settings::local_damping`](crate::Settings)).
+    pub local: f64,
     /// Step of the velocity update, `(Δt^{n−½} + Δt^{n+½}) / 2` (s).
     pub dt_avg: f64,
     /// Step of the position update, `Δt^{n+½}` (s).
@@ -224,9 +226,20 @@ fn advance(
 ) {
     let [f, f_ext, fc, fd] = forces;
     let v_old = *v;
+    let b = inp.bc[i];
+    // local damping: −α_L |f| sign(v^{n−½}) on each free component
+    let mut f_local = [0.0; 2];
+    if inp.local > 0.0 {
+        let held = if b != NO_BC { inp.constraints[b as usize].fixed } else { [false; 2] };
+        for d in 0..2 {
+            if !held[d] && v_old[d] != 0.0 {
+                f_local[d] = -inp.local * f[d].abs() * v_old[d].signum();
+            }
+        }
+    }
+    let f = if inp.local > 0.0 { [f[0] + f_local[0], f[1] + f_local[1]] } else { f };
     let r = inp.dt_avg / m;
     let mut v_new = [(keep * v_old[0] + r * f[0]) * scale, (keep * v_old[1] + r * f[1]) * scale];
-    let b = inp.bc[i];
     let dxc =
         |vn: Vec2| [0.5 * (inp.dt * vn[0] + inp.dt_prev * v_old[0]), 0.5 * (inp.dt * vn[1] + inp.dt_prev * v_old[1])];
     if b != NO_BC {
@@ -249,6 +262,9 @@ fn advance(
     if inp.alpha > 0.0 {
         let vm = [0.5 * (v_old[0] + v_new[0]), 0.5 * (v_old[1] + v_new[1])];
         acc.damping += inp.alpha * m * (vm[0] * dx[0] + vm[1] * dx[1]);
+    }
+    if inp.local > 0.0 {
+        acc.damping -= f_local[0] * dx[0] + f_local[1] * dx[1];
     }
     x[0] += inp.dt * v_new[0];
     x[1] += inp.dt * v_new[1];

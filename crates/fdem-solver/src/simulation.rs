@@ -652,6 +652,7 @@ impl Simulation {
                 amplitude_values: &self.amplitude_values,
                 gravity: self.gravity,
                 alpha: self.settings.mass_damping,
+                local: self.settings.local_damping,
                 dt_avg,
                 dt,
                 dt_prev: self.dt_prev,
@@ -922,6 +923,9 @@ pub(crate) fn check_settings(s: &Settings) -> Result<(), SetupError> {
     }
     if !(s.stiffness_damping >= 0.0 && s.stiffness_damping.is_finite()) {
         return invalid(format!("stiffness damping beta = {} must be finite and >= 0", s.stiffness_damping));
+    }
+    if !(s.local_damping >= 0.0 && s.local_damping < 1.0) {
+        return invalid(format!("local damping = {} must lie in [0, 1)", s.local_damping));
     }
     if !(s.safety > 0.0 && s.safety <= 1.0) {
         return invalid(format!("time-step safety factor = {} must lie in (0, 1]", s.safety));
