@@ -192,7 +192,7 @@ def without_lineage(path, out, parents: np.ndarray, bonds: int) -> None:
     assert b[:8] == b"FDEMCKPT" and struct.unpack_from("<I", b, 8)[0] == 8
     s_len, u_len = struct.unpack_from("<QQ", b, 16)
     varint = lambda n: max(1, -(-int(n).bit_length() // 7))  # noqa: E731
-    block = varint(len(parents)) + sum(varint(p) for p in parents) + varint(bonds) + 16 * bonds + 8
+    block = varint(len(parents)) + sum(varint(p) for p in parents) + varint(bonds) + 16 * bonds + 8 + 2
     state, user = b[40 : 40 + s_len - block], b[40 + s_len :]
     head = bytearray(b[:40])
     struct.pack_into("<I", head, 8, 6)

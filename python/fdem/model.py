@@ -6,6 +6,7 @@ of its model and settings (DESIGN §9).
 
 from __future__ import annotations
 
+import math
 import os
 import pickle
 from collections.abc import Callable, Mapping
@@ -142,6 +143,7 @@ class Model:
         self._contact: dict[str, Any] | None = None
         self._fracture: dict[str, Any] | None = None
         self._stages: list[tuple[float, NDArray[np.int64]]] = []
+        self._stage_ramps: list[float] = []
 
     @staticmethod
     def _check_material(name: str, m: Any) -> None:
@@ -331,13 +333,24 @@ class Model:
         return self
 
     # --- staging ----------------------------------------------------------
-    def excavate(self, where: str | Any, *, at: float) -> Model:
+    def excavate(self, where: str | Any, *, at: float, ramp: float = 0.0) -> Model:
         """Schedules an excavation stage (DESIGN §4.6): the elements of
         ``where`` (an element-set name or element ids) are removed once the
         simulated time reaches ``at`` (s), with every piece crack insertion
         has cut from them by then. Their mass and forces leave their
         nodes; nodes left without elements leave the model; the energy they
-        take away is booked as ``excavated``. Stages run in time order."""
+        take away is booked as ``excavated``. Stages run in time order.
+
+        With ``ramp`` (s) > 0 the excavation is gradual, as in FLAC and
+        UDEC: the forces the removed elements exerted on the nodes that
+        stay are applied to those nodes as loads that fall linearly to zero
+        over ``ramp``, so the rock around the opening unloads over that
+        time instead of at once (an instantaneous excavation of a stressed
+        opening sends a release wave that can crack the walls). The loads'
+        work is booked as external work."""
+        r = number("ramp", ramp)
+        if not (r >= 0 and math.isfinite(r)):
+            raise ValueError(f"ramp = {r} s must be finite and not negative (the release time of the stage)")
         t = number("at", at)
         if t < 0:
             raise ValueError(f"at = {t} s must not be negative (the time of the excavation stage)")
@@ -345,6 +358,10 @@ class Model:
         if len(ids) == 0:
             raise ValueError(f"excavation stage at {t} s has no elements")
         self._stages.append((t, np.asarray(ids, dtype=np.int64)))
+        ramps = getattr(self, "_stage_ramps", None)
+        if ramps is None:  # a model saved before gradual excavation
+            ramps = self._stage_ramps = [0.0] * (len(self._stages) - 1)
+        ramps.append(r)
         return self
 
     @property
@@ -605,6 +622,7 @@ class Model:
             "initial_stress": self._initial_stress,
             "stage_times": [t for t, _ in self._stages],
             "stage_elements": [ids for _, ids in self._stages],
+            "stage_ramps": list(getattr(self, "_stage_ramps", None) or [0.0] * len(self._stages)),
         }
         if cn:
             out.update(

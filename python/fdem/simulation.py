@@ -476,7 +476,7 @@ class Simulation:
         self._core.renumber()
         return self
 
-    def deactivate(self, where: str | Any, *, descendants: bool = True) -> int:
+    def deactivate(self, where: str | Any, *, descendants: bool = True, ramp: float = 0.0) -> int:
         """Removes elements now, as an excavation stage would; returns how
         many were removed (already removed ones are skipped).
 
@@ -488,12 +488,17 @@ class Simulation:
         included (:meth:`elements` lists them). ``descendants=False``
         removes exactly the elements named, by their current ids (e.g. one
         fragment's elements), and leaves pieces cut from them elsewhere.
+        With ``ramp`` (s) > 0 their forces on the nodes that stay are
+        released over that time (:meth:`Model.excavate`).
         """
         if isinstance(where, str):
             ids = self.model.mesh.elements(where)
         else:
             ids = index_array("elements", where, (None,))  # the kernel names a missing one
-        return int(self._core.deactivate(np.ascontiguousarray(ids, dtype=np.int64), bool(descendants)))
+        r = number("ramp", ramp)
+        if not (r >= 0 and math.isfinite(r)):
+            raise ValueError(f"ramp = {r} s must be finite and not negative")
+        return int(self._core.deactivate(np.ascontiguousarray(ids, dtype=np.int64), bool(descendants), r))
 
     def elements(self, where: str | Any) -> NDArray[np.int64]:
         """The elements now (ids, ascending, removed ones included) of an

@@ -186,7 +186,7 @@ impl PySimulation {
         amplitudes=Vec::new(), initial_velocity=None, initial_stress=None,
         contact_laws=None, contact_facets=None, contact_facet_laws=None, crack_law=0, contact_margin=None,
         fracture_interval=0, fracture_edge_tolerance=15.0, fracture_crack_tolerance=30.0, fracture_min_quality=0.2, fracture_min_altitude=0.0, fracture_insert_at=0.02,
-        stage_times=Vec::new(), stage_elements=Vec::new(),
+        stage_times=Vec::new(), stage_elements=Vec::new(), stage_ramps=Vec::new(),
         mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.05, mass_scaling=None, renumber=None, threads=0, local_damping=0.0
     ))]
     fn new(
@@ -219,6 +219,7 @@ impl PySimulation {
         fracture_insert_at: f64,
         stage_times: Vec<f64>,
         stage_elements: Vec<PyReadonlyArray1<'_, i64>>,
+        stage_ramps: Vec<f64>,
         mass_damping: f64,
         stiffness_damping: f64,
         safety: f64,
@@ -347,8 +348,12 @@ impl PySimulation {
                     insert_at: fracture_insert_at,
                 }),
                 stages: {
-                    if stage_times.len() != stage_elements.len() {
-                        return Err(value_error("stage_times and stage_elements must have the same length"));
+                    if stage_times.len() != stage_elements.len()
+                        || !(stage_ramps.is_empty() || stage_ramps.len() == stage_times.len())
+                    {
+                        return Err(value_error(
+                            "stage_times, stage_elements and stage_ramps (if given) must have the same length",
+                        ));
                     }
                     let mut stages = Vec::with_capacity(stage_times.len());
                     for (k, (&time, ids)) in stage_times.iter().zip(&stage_elements).enumerate() {
@@ -359,7 +364,8 @@ impl PySimulation {
                             .enumerate()
                             .map(|(i, &e)| to_u32(&name, i, e))
                             .collect::<PyResult<Vec<u32>>>()?;
-                        stages.push(ExcavationStage { time, elements });
+                        let ramp = stage_ramps.get(k).copied().unwrap_or(0.0);
+                        stages.push(ExcavationStage { time, elements, ramp });
                     }
                     stages
                 },
@@ -541,9 +547,11 @@ impl PySimulation {
     }
 
     /// Removes elements now (excavation), with `descendants` also every
-    /// piece cracks have cut from them; returns how many were removed.
-    #[pyo3(signature = (elements, descendants=true))]
-    fn deactivate(&mut self, elements: PyReadonlyArray1<'_, i64>, descendants: bool) -> PyResult<usize> {
+    /// piece cracks have cut from them, their forces on the nodes that
+    /// stay released over `ramp` (s; 0: at once); returns how many were
+    /// removed.
+    #[pyo3(signature = (elements, descendants=true, ramp=0.0))]
+    fn deactivate(&mut self, elements: PyReadonlyArray1<'_, i64>, descendants: bool, ramp: f64) -> PyResult<usize> {
         guard(|| {
             self.ok()?;
             let ids: Vec<u32> = elements
@@ -552,7 +560,7 @@ impl PySimulation {
                 .enumerate()
                 .map(|(i, &e)| to_u32("elements", i, e))
                 .collect::<PyResult<_>>()?;
-            self.sim.deactivate(&ids, descendants).map_err(|e| value_error(e.to_string()))
+            self.sim.deactivate_gradually(&ids, descendants, ramp).map_err(|e| value_error(e.to_string()))
         })
     }
 

@@ -146,6 +146,8 @@ macro_rules! saved_state {
                 elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
                 contact_omega: Vec::new(),
                 omega_carry: Default::default(),
+                released: Vec::new(),
+                release_force: Vec::new(),
                 contact_damped: Vec::new(),
                 dashpot_force: Vec::new(),
                 pred_v: Vec::new(),
@@ -326,14 +328,17 @@ impl Format7 {
 /// What format 8 added, written after [`Format7`]: each bond's offset
 /// ([`Bond::offset`](fdem_contact::Bond::offset), the opening with which a
 /// bond took over the force through its node when its crack was
-/// inserted), in the order of the bonds, and the local damping
-/// coefficient ([`Settings::local_damping`]). A file of an older format
-/// restores its bonds slack (offset zero), as they were made, and no
-/// local damping.
+/// inserted), in the order of the bonds, the local damping coefficient
+/// ([`Settings::local_damping`]), each excavation stage's release time and
+/// the loads of gradual excavations still acting ([`crate::Release`]). A
+/// file of an older format restores its bonds slack (offset zero), as
+/// they were made, no local damping and instantaneous stages.
 #[derive(Serialize, Deserialize)]
 struct Format8 {
     offsets: Vec<Vec2>,
     local_damping: f64,
+    stage_ramps: Vec<f64>,
+    released: Vec<crate::Release>,
 }
 
 impl Format8 {
@@ -341,6 +346,8 @@ impl Format8 {
         Format8 {
             offsets: s.fracture.as_ref().map_or_else(Vec::new, |f| f.bonds.iter().map(|b| b.offset).collect()),
             local_damping: s.settings.local_damping,
+            stage_ramps: s.stages.iter().map(|st| st.ramp).collect(),
+            released: s.released.clone(),
         }
     }
 }
@@ -461,11 +468,27 @@ impl Simulation {
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
         }
-        if let Some(Format8 { offsets, local_damping }) = offsets {
+        let mut released = Vec::new();
+        if let Some(Format8 { offsets, local_damping, stage_ramps, released: r }) = offsets {
             if !(0.0..1.0).contains(&local_damping) {
                 return Err(CheckpointError::Invalid(format!("local damping {local_damping} must lie in [0, 1)")));
             }
             owned.settings.local_damping = local_damping;
+            let n = owned.nodes.x.len();
+            if stage_ramps.len() != owned.stages.len()
+                || stage_ramps.iter().any(|t| !(*t >= 0.0 && t.is_finite()))
+                || r.iter().any(|r| {
+                    r.nodes.len() != r.forces.len()
+                        || !(r.ramp > 0.0 && r.ramp.is_finite() && r.start.is_finite())
+                        || r.nodes.iter().any(|&v| v as usize >= n)
+                })
+            {
+                return Err(CheckpointError::Invalid("the gradual excavations do not match the model".into()));
+            }
+            for (st, t) in owned.stages.iter_mut().zip(stage_ramps) {
+                st.ramp = t;
+            }
+            released = r;
             let bonds = owned.fracture.as_mut().map_or(&mut [][..], |f| &mut f.bonds[..]);
             if offsets.len() != bonds.len() || offsets.iter().any(|o| !(o[0].is_finite() && o[1].is_finite())) {
                 return Err(CheckpointError::Invalid("the bonds' offsets do not match the bonds".into()));
@@ -508,6 +531,8 @@ impl Simulation {
             .map_err(|e| CheckpointError::Io(format!("cannot start {threads} threads: {e}")))?;
         let mut sim = assemble(owned, Arc::new(pool));
         sim.layout = renumbering.layout;
+        sim.released = released;
+        sim.update_release();
         if let Some(c) = sim.contact.as_mut() {
             if let Some(saved) = dashpots {
                 for (list, saved) in [&mut c.out, &mut c.corner_out].into_iter().zip(saved.dashpots) {

@@ -9,6 +9,8 @@
 //! the elastic energy of dropped bonds, is booked as `excavated`, so the
 //! energy account still closes.
 
+use fdem_element::Vec2;
+
 use crate::error::SetupError;
 use crate::simulation::Simulation;
 use crate::{Energies, ExcavationStage};
@@ -22,6 +24,25 @@ impl Simulation {
     /// the elements named. Errors name the first id out of range; nothing
     /// is changed then.
     pub fn deactivate(&mut self, elements: &[u32], descendants: bool) -> Result<usize, SetupError> {
+        self.deactivate_gradually(elements, descendants, 0.0)
+    }
+
+    /// [`Self::deactivate`], with the forces the removed elements exerted
+    /// on the nodes that stay applied to those nodes as loads that fall
+    /// linearly to zero over `ramp` (s; 0: at once): gradual excavation,
+    /// as FLAC and UDEC users know it. The rock around the opening then
+    /// unloads over the ramp instead of in one step, which keeps the
+    /// dynamic spalling of an instantaneous excavation out of a
+    /// quasi-static one. The loads' work is external work.
+    pub fn deactivate_gradually(
+        &mut self,
+        elements: &[u32],
+        descendants: bool,
+        ramp: f64,
+    ) -> Result<usize, SetupError> {
+        if !(ramp >= 0.0 && ramp.is_finite()) {
+            return Err(SetupError::Invalid(format!("release time {ramp} must be finite and >= 0")));
+        }
         let m = self.elems.conn.len();
         if let Some(&e) = elements.iter().find(|&&e| e as usize >= m) {
             return Err(SetupError::Invalid(format!("element {e} does not exist (the model has {m})")));
@@ -50,6 +71,18 @@ impl Simulation {
         // nodes that stay keep their whole-step velocities.
         let before = self.energies();
         let v_n = self.velocities_by_index();
+        // the removed elements' forces on their nodes, which the nodes that
+        // stay go on feeling as loads over the ramp
+        let mut load: Vec<(u32, Vec2)> = Vec::new();
+        if ramp > 0.0 {
+            for &e in &remove {
+                for (k, &v) in self.elems.conn[e].iter().enumerate() {
+                    let f = self.elems.force[3 * e + k];
+                    load.push((v, [-f[0], -f[1]]));
+                }
+            }
+            load.sort_by_key(|&(v, _)| v);
+        }
         for &e in &remove {
             self.elems.active[e] = false;
         }
@@ -64,6 +97,24 @@ impl Simulation {
             fr.bonds.retain(|b| b.nodes.iter().all(|&n| mass[n as usize] > 0.0));
         }
         self.refresh_forces();
+        // the loads act from now: before the whole-step velocities are kept
+        if !load.is_empty() {
+            let mut release = crate::Release { start: self.time, ramp, nodes: Vec::new(), forces: Vec::new() };
+            for (v, f) in load {
+                if self.nodes.mass[v as usize] <= 0.0 {
+                    continue; // the node left with the elements
+                }
+                if release.nodes.last() == Some(&v) {
+                    let last = release.forces.last_mut().expect("a force per node");
+                    *last = [last[0] + f[0], last[1] + f[1]];
+                } else {
+                    release.nodes.push(v);
+                    release.forces.push(f);
+                }
+            }
+            self.released.push(release);
+            self.update_release();
+        }
         self.keep_whole_step_velocities(&v_n);
         let after = self.energies();
         self.energies.excavated += self.keep_work_continuous(&before, &after);
@@ -96,7 +147,8 @@ impl Simulation {
             let stage = std::mem::take(&mut self.stages[self.next_stage].elements);
             // ids were checked at set-up; a stage removes the pieces
             // cracks have cut from its elements too
-            let _ = self.deactivate(&stage, true);
+            let ramp = self.stages[self.next_stage].ramp;
+            let _ = self.deactivate_gradually(&stage, true, ramp);
             self.stages[self.next_stage].elements = stage;
             self.next_stage += 1;
             ran = true;

@@ -64,7 +64,7 @@ pub mod mesh {
 }
 pub use loads::{Amplitude, Constraint, PressureLoad};
 pub use model::{
-    ContactSpec, ExcavationStage, FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Settings,
+    ContactSpec, ExcavationStage, FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Release, Settings,
 };
 pub use simulation::{ContactInfo, ContactStats, PhaseTimes, Simulation};
 

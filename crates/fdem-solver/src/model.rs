@@ -2,6 +2,8 @@
 
 use fdem_material::CrackBand;
 
+use fdem_element::Vec2;
+
 use crate::loads::{Amplitude, Constraint, PressureLoad};
 
 /// A material as given by the user: density, elastic constants and law.
@@ -154,6 +156,36 @@ pub struct ExcavationStage {
     /// The elements removed (ids; already removed ones are skipped), with
     /// every piece crack insertion has cut from them.
     pub elements: Vec<u32>,
+    /// Release time (s): the forces the removed elements exerted on the
+    /// nodes that stay are applied to them as loads that fall linearly to
+    /// zero over this time (gradual excavation, as in FLAC and UDEC);
+    /// 0 removes them at once.
+    // written in format 8 of checkpoints (checkpoint.rs)
+    #[serde(skip)]
+    pub ramp: f64,
+}
+
+/// The loads of a gradual excavation ([`ExcavationStage::ramp`]): the
+/// forces the removed elements exerted on the nodes that stay, applied to
+/// them from `start` and falling linearly to zero at `start + ramp`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Release {
+    /// Time (s) the elements were removed.
+    pub start: f64,
+    /// Time (s) over which the loads fall to zero.
+    pub ramp: f64,
+    /// The nodes that carried the removed elements (internal indices).
+    pub nodes: Vec<u32>,
+    /// Their loads at `start` (N per unit thickness).
+    pub forces: Vec<Vec2>,
+}
+
+impl Release {
+    /// The share of the loads applied at time `t`: 1 at `start`, 0 from
+    /// `start + ramp` on.
+    pub fn share(&self, t: f64) -> f64 {
+        (1.0 - (t - self.start) / self.ramp).clamp(0.0, 1.0)
+    }
 }
 
 /// Crack insertion (paper 2.4, DESIGN §4.4, docs/fracture.md).

@@ -55,6 +55,8 @@ pub(crate) struct NodeInputs<'a> {
     pub alpha: f64,
     /// Local damping coefficient `α_L` ([`Settings::local_damping`](crate::Settings)).
     pub local: f64,
+    /// Loads of gradual excavations per node (N), or empty.
+    pub release: &'a [Vec2],
     /// Step of the velocity update, `(Δt^{n−½} + Δt^{n+½}) / 2` (s).
     pub dt_avg: f64,
     /// Step of the position update, `Δt^{n+½}` (s).
@@ -188,7 +190,8 @@ impl NodeInputs<'_> {
                 self.contact_damping.get(b).copied().unwrap_or(zero),
             )
         };
-        ([m * self.gravity[0] + fp[0], m * self.gravity[1] + fp[1]], fc, fd)
+        let r = self.release.get(i).copied().unwrap_or([0.0; 2]);
+        ([m * self.gravity[0] + fp[0] + r[0], m * self.gravity[1] + fp[1] + r[1]], fc, fd)
     }
 
     /// Sets node `i`'s held velocity components to their prescribed values.

@@ -219,7 +219,8 @@ impl Simulation {
     fn net_force(&self, i: usize) -> Vec2 {
         let m = self.nodes.mass[i];
         let (p, c) = self.surface_force(i);
-        let mut f = [m * self.gravity[0] + p[0] + c[0], m * self.gravity[1] + p[1] + c[1]];
+        let r = self.release_force.get(i).copied().unwrap_or([0.0; 2]);
+        let mut f = [m * self.gravity[0] + p[0] + c[0] + r[0], m * self.gravity[1] + p[1] + c[1] + r[1]];
         for &item in self.node_elems.row(i) {
             let fe = self.elems.force[item as usize];
             f[0] -= fe[0];
@@ -456,7 +457,8 @@ impl Simulation {
         let half = self.nodes.v[i];
         let dx = [h * half[0], h * half[1]];
         let (p, c) = self.surface_force(i);
-        let external = (m * g[0] + p[0]) * dx[0] + (m * g[1] + p[1]) * dx[1];
+        let r = self.release_force.get(i).copied().unwrap_or([0.0; 2]);
+        let external = (m * g[0] + p[0] + r[0]) * dx[0] + (m * g[1] + p[1] + r[1]) * dx[1];
         let contact = c[0] * dx[0] + c[1] * dx[1];
         let mut contact_damping = 0.0;
         let bn = self.surface.index_of[i];

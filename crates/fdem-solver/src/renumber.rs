@@ -304,6 +304,11 @@ impl Simulation {
         if let Some(fr) = &mut self.fracture {
             fr.renumber(&node_order, &elem_order, &node_map);
         }
+        for r in &mut self.released {
+            r.nodes.iter_mut().for_each(|v| *v = node_map[*v as usize]);
+        }
+        self.release_force.clear();
+        self.update_release();
         self.node_elems = active_node_elements(n, &self.elems.conn, &self.elems.active);
         // by the old boundary indices: worked out again at the next
         // evaluation

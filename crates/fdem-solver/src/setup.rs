@@ -198,6 +198,9 @@ impl Simulation {
             if !st.time.is_finite() {
                 return invalid(format!("excavation stage {k}: time {} is not finite", st.time));
             }
+            if !(st.ramp >= 0.0 && st.ramp.is_finite()) {
+                return invalid(format!("excavation stage {k}: release time {} must be finite and >= 0", st.ramp));
+            }
             if let Some(&e) = st.elements.iter().find(|&&e| e as usize >= m) {
                 return invalid(format!("excavation stage {k}: element {e} does not exist (the model has {m})"));
             }
@@ -291,6 +294,8 @@ impl Simulation {
             elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
             contact_omega: Vec::new(),
             omega_carry: Default::default(),
+            released: Vec::new(),
+            release_force: Vec::new(),
             layout: crate::renumber::Layout::new(m),
             pool: Arc::new(pool),
         };

@@ -185,6 +185,12 @@ pub struct Simulation {
     /// to the new surface instead of working every boundary node out again
     /// ([`Simulation::carry_contact_omega`]; scratch).
     pub(crate) omega_carry: OmegaCarry,
+    /// The loads of gradual excavations still falling to zero
+    /// ([`crate::Release`]).
+    pub(crate) released: Vec<crate::Release>,
+    /// Their sum per node at the current whole step (N; empty while none
+    /// acts): an external load of the node pass ([`Self::update_release`]).
+    pub(crate) release_force: Vec<Vec2>,
     /// Internal index ↔ id of nodes and elements (spatial renumbering).
     pub(crate) layout: crate::renumber::Layout,
     /// Worker threads; every public entry point that steps runs inside it
@@ -653,6 +659,7 @@ impl Simulation {
                 gravity: self.gravity,
                 alpha: self.settings.mass_damping,
                 local: self.settings.local_damping,
+                release: &self.release_force,
                 dt_avg,
                 dt,
                 dt_prev: self.dt_prev,
@@ -679,6 +686,9 @@ impl Simulation {
         self.time += dt;
         self.step += 1;
         self.dt_prev = dt;
+        if !self.released.is_empty() || !self.release_force.is_empty() {
+            self.update_release();
+        }
         let mut bad_node = None;
         let mut max_speed2 = 0.0f64;
         for p in &self.node_partials {
@@ -1031,5 +1041,31 @@ pub(crate) fn contact_bound(we: f64, wc2: f64, rattle: bool) -> f64 {
         stable.max(2.0 * wc2.sqrt())
     } else {
         stable
+    }
+}
+
+impl Simulation {
+    /// Sums the loads of the gradual excavations at the current time into
+    /// [`Self::release_force`] and drops those that have fallen to zero
+    /// (the array is emptied once none is left, so a run without them pays
+    /// nothing).
+    pub(crate) fn update_release(&mut self) {
+        let t = self.time;
+        self.released.retain(|r| r.share(t) > 0.0);
+        if self.released.is_empty() {
+            self.release_force.clear();
+            return;
+        }
+        let n = self.nodes.x.len();
+        self.release_force.clear();
+        self.release_force.resize(n, [0.0; 2]);
+        for r in &self.released {
+            let s = r.share(t);
+            for (&v, f) in r.nodes.iter().zip(&r.forces) {
+                let out = &mut self.release_force[v as usize];
+                out[0] += s * f[0];
+                out[1] += s * f[1];
+            }
+        }
     }
 }

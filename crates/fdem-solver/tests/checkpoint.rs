@@ -159,10 +159,12 @@ fn format7_len(sim: &Simulation) -> usize {
     varint(sim.n_elements()) + sim.element_parents().iter().map(|&p| varint(p as usize)).sum::<usize>()
 }
 
-/// Bytes of the format-8 block: the bond offsets (a varint count and two
-/// f64 per bond) and the local damping (one f64).
+/// Bytes of the format-8 block of a run without excavation stages: the
+/// bond offsets (a varint count and two f64 per bond), the local damping
+/// (one f64) and two empty lists (stage release times, gradual
+/// excavations).
 fn format8_len(sim: &Simulation) -> usize {
-    varint(sim.bonds().len()) + 16 * sim.bonds().len() + 8
+    varint(sim.bonds().len()) + 16 * sim.bonds().len() + 8 + 2
 }
 
 /// The plate with contact on its own surface (a dashpot of damping ratio
@@ -417,11 +419,12 @@ fn a_format_7_file_reads_with_slack_bonds_and_bad_offsets_are_refused() {
     let (b, _) = Simulation::from_checkpoint_bytes(&v7, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v8, "format 7 read back differs");
     // one offset where there is no bond: the count (the byte before the
-    // local damping's f64) made 1 and two f64 put after it
+    // local damping's f64 and the two empty lists) made 1 and two f64 put
+    // after it
     let s_len = u64::from_le_bytes(v8[16..24].try_into().unwrap()) as usize;
-    let mut state = v8[40..40 + s_len - 8].to_vec();
+    let mut state = v8[40..40 + s_len - 10].to_vec();
     *state.last_mut().unwrap() = 1;
-    state.extend_from_slice(&[0u8; 16 + 8]);
+    state.extend_from_slice(&[0u8; 16 + 8 + 2]);
     let mut bad = v8[..40].to_vec();
     bad.extend_from_slice(&state);
     bad[16..24].copy_from_slice(&(state.len() as u64).to_le_bytes());
