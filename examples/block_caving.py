@@ -12,7 +12,7 @@ Results (VTU series, the paper's Fig. 4 and Fig. 5 kinds of pictures, probe
 stresses at the Table 2 points, fragment sizes, the energy history and a
 summary) go into one directory; see ``fdem.caving``.
 
-    python examples/block_caving.py            # the paper's scale (78 216 triangles)
+    python examples/block_caving.py            # the paper's scale (1.0 m elements, 54 746 triangles)
     python examples/block_caving.py --quick    # a coarse version (4 m elements, to 0.8 s)
     python examples/block_caving.py --resume   # go on after Ctrl-C or a lost machine
 
