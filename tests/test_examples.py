@@ -101,3 +101,24 @@ def test_notched_beam_meshes_and_insertion():
         assert r["largest_change_at_insertion"] < 0.05
     assert runs[0]["peak_load"] == pytest.approx(late["peak_load"], rel=0.03)
     assert runs[1]["peak_load"] == pytest.approx(runs[0]["peak_load"], rel=0.05)
+
+
+def test_caving_ensemble_example(tmp_path):
+    """Issue 35 (4) at a tiny size (joint spacings ×8, 4 m elements,
+    to 0.06 s): 2 realisations × 2 friction angles on a local cluster, every
+    run ok, the realisations different, the table and figure written."""
+    pytest.importorskip("distributed")
+    from fdem.caving import CavingCase
+
+    tiny = CavingCase(size=4.0, joint_scale=8.0, support=5.0, until=0.06, interval=0.03, output_every=0.03)
+    r = load("caving_ensemble").main(str(tmp_path), seeds=2, frictions=(25.0, 41.0), case=tiny, quiet=True)
+    table = r["table"]
+    assert len(table) == 4
+    assert list(table["status"]) == ["ok"] * 4, list(table["error"])
+    assert sorted(set(table["joint_law.friction"])) == [25.0, 41.0]
+    assert sorted(set(table["seed"])) == [0, 1]
+    # two realisations of the joints are two meshes
+    assert table.groupby("joint_law.friction")["elements_initial"].nunique().min() == 2
+    assert list(r["spread"].index) == [25.0, 41.0]
+    assert (tmp_path / "spread.csv").is_file()
+    assert (tmp_path / "spread.png").stat().st_size > 10_000

@@ -211,8 +211,8 @@ def _write(path: Path, rows: Sequence[dict[str, Any]]) -> pd.DataFrame:
 
 
 def _progress(total: int, quiet: bool) -> Any:
-    """A bar on stderr of runs done of ``total``, failures and ETA (rich),
-    or a stand-in that shows nothing."""
+    """A bar on stderr of runs done of ``total``, failures and ETA (rich);
+    ``None`` when ``quiet``."""
     if quiet:
         return None
     from rich.console import Console
@@ -319,9 +319,10 @@ def run_ensemble(
     for name, value in (("workers", workers), ("threads", threads)):
         if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
             raise ValueError(f"{name} must be a whole number >= 1, got {value!r}")
+    realisations = list(seeds) if seeds is not None else [None]
     runs: dict[str, tuple[CavingCase, int | None]] = {}
     for c in listed:
-        for s in seeds if seeds is not None else [None]:
+        for s in realisations:
             if s is not None:
                 seeded(c, s)  # a bad seed is the caller's error, before anything runs
             runs.setdefault(run_key(c, s), (c, s))
@@ -347,7 +348,7 @@ def run_ensemble(
                     n_workers=n,
                     threads_per_worker=1,
                     processes=True,
-                    dashboard_address=None,
+                    dashboard_address=":0",
                     silence_logs=logging.ERROR if quiet else logging.WARNING,
                 )
             )
