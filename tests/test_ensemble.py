@@ -154,3 +154,39 @@ def test_bad_arguments(tmp_path):
     with pytest.raises(ValueError, match="no joint set of the case is perturbed"):
         run_ensemble(TINY, out, seeds=[1, 2])
     assert not out.exists()
+
+
+def _die(case, seed=None, **options):
+    """In a worker process (where fdem.ensemble.run_row is the real one):
+    the run of the 10 m case kills the process, as the system would one
+    out of memory; the others run."""
+    import os
+
+    from fdem.ensemble import run_row
+
+    if case.size == 10.0:
+        os._exit(1)
+    return run_row(case, seed, **options)
+
+
+def test_a_dead_worker_is_a_row(tmp_path, monkeypatch):
+    """A worker that dies during a run makes that run a row with the error;
+    the other run finishes. The task (this module's ``_die``, sent by
+    value) stands in for run_row."""
+    import sys
+
+    import cloudpickle
+    import dask
+    import fdem.ensemble as ens
+
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    monkeypatch.setattr(ens, "run_row", _die)
+    out = tmp_path / "runs.parquet"
+    try:
+        with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+            table = run_ensemble([TINY, TOO_COARSE], out, workers=2, quiet=True)
+    finally:
+        cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
+    assert list(table["status"]) == ["ok", "error"], list(table["error"])
+    assert "KilledWorker" in table["error"].iloc[1]
+    assert len(pd.read_parquet(out)) == 2
