@@ -6,7 +6,8 @@ MPa, σ_zz = ν(σ_xx + σ_yy)), in a square of rock held by rollers on its
 sides. Two joint sets are embedded in the gmsh geometry as physical lines
 of their names and opened into contact interfaces with their own law
 (``Mesh.read(path, joints=[...])``); their traces are cleaned of slivers
-(:func:`fdem.clean_traces`) before gmsh sees them. The in-situ stress is
+before gmsh sees them (:func:`fdem.clean_traces` for ends near another
+trace or a side, :func:`snap_vertices` for the wall and the corners). The in-situ stress is
 brought to equilibrium (the joints close onto their penalty springs), then
 the tunnel is excavated in two stages, the top heading and then the bench,
 each followed by a damped equilibrium. Pictures of the fractured zone and
@@ -23,10 +24,11 @@ the far-field traction held (softer), the same order either way. Rollers
 hold the in-situ stress exactly in equilibrium and leave no rigid-body
 motion to damp, so they are used. The Kirsch mesh has L = 60 m = 20 a:
 the estimate is 0.4%; measured on the springline (the larger, deviatoric
-part), L = 30, 60, 120 and 240 m give 3.141, 3.210, 3.224 and 3.232 mm,
-so L = 60 m sits about 0.8% below the infinite plate.
+part), L = 30, 60, 120 and 240 m give 3.141, 3.210, 3.224 and 3.232 mm
+(0.25 m at the wall), so L = 60 m sits about 0.8% below the infinite
+plate.
 
-    python examples/tunnel.py [--size quick|full] [--elastic] [--out DIR]
+    python examples/tunnel.py [--size quick|kirsch] [--elastic] [--out DIR]
 """
 
 from __future__ import annotations
@@ -46,10 +48,11 @@ SIGMA_V = 10e6  # vertical in-situ stress (Pa, compressive)
 K0 = 1.5
 
 #: Sizes: half-width L of the square (m) and element size at the wall and
-#: far away (m).
+#: far away (m). A finer jointed mesh (0.2 m at the wall, 2 m far) still
+#: crept at 1.4 mm/s after 2 s of mass-damped equilibrium in its first
+#: stage: it waits for the local damping of issue 36 (2).
 SIZES = {
     "quick": {"half_width": 30.0, "wall": 0.5, "far": 4.0},
-    "full": {"half_width": 30.0, "wall": 0.2, "far": 2.0},
     "kirsch": {"half_width": 60.0, "wall": 0.25, "far": 8.0},
 }
 
@@ -273,7 +276,7 @@ def main(size: str | None = None, elastic: bool = False, out: str | None = "tunn
 
     Parameters
     ----------
-    size : {"quick", "full", "kirsch"}, optional
+    size : {"quick", "kirsch"}, optional
         Mesh and domain (:data:`SIZES`); default ``quick``, or ``kirsch``
         for the elastic variant.
     elastic : bool
@@ -321,6 +324,8 @@ def main(size: str | None = None, elastic: bool = False, out: str | None = "tunn
     before = sim.displacements()[: mesh.n_nodes].copy()
     stages = [("heading", "bench")] if elastic else [("heading",), ("bench",)]
     speed = 0.0
+    # each stage starts when the previous one has come to rest, a time not
+    # known in advance: deactivate now rather than Model.excavate(at=)
     for k, groups in enumerate(stages):
         for g in groups:
             sim.deactivate(g)
