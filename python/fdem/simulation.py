@@ -540,6 +540,7 @@ class Simulation:
         restart_clock: bool = True,
         elastic: bool = True,
         progress: bool = False,
+        local_damping: float | None = None,
     ) -> dict[str, float]:
         """A damped equilibrium stage (DESIGN §4.6): runs with mass damping
         until the largest node speed is below ``max_velocity`` (m/s), then
@@ -564,6 +565,11 @@ class Simulation:
             in equilibrium where joints and free faces meet the initial
             stress, and its transient would otherwise crack the rock (with
             f_t small against the in-situ stress) before any excavation.
+        local_damping : float, optional
+            Damp the stage with local damping ``α_L`` (e.g. 0.8, FLAC's
+            default for statics; see the class's ``local_damping``) instead
+            of mass damping. Mass damping resists any motion, the slow creep
+            of loosening blocks too; local damping only what accelerates.
 
         Returns a dict with the stage's ``time`` (s), ``steps`` and final
         ``max_velocity``.
@@ -575,7 +581,10 @@ class Simulation:
         alpha = np.pi * cp / height if damping is None else positive("damping", damping)
         limit = 100 * height / cp if max_time is None else positive("max_time", max_time)
         before = dict(self._settings)
-        self.configure(mass_damping=alpha)
+        if local_damping is None:
+            self.configure(mass_damping=alpha)
+        else:
+            self.configure(mass_damping=0.0, local_damping=local_damping)
         self._core.set_elastic_stage(bool(elastic))
         t0, s0 = self.time, self.steps
         speed = np.inf
