@@ -29,7 +29,7 @@ part), L = 30, 60, 120 and 240 m give 3.141, 3.210, 3.224 and 3.232 mm
 (0.25 m at the wall), so L = 60 m sits about 0.8% below the infinite
 plate.
 
-    python examples/tunnel.py [--size quick|kirsch] [--elastic] [--out DIR]
+    python examples/tunnel.py [--size quick|fine|kirsch] [--elastic] [--out DIR]
 """
 
 from __future__ import annotations
@@ -56,6 +56,7 @@ K0 = 1.5
 #: stage: it waits for the local damping of issue 36 (2).
 SIZES = {
     "quick": {"half_width": 30.0, "wall": 0.5, "far": 4.0},
+    "fine": {"half_width": 30.0, "wall": 0.2, "far": 2.0},
     "kirsch": {"half_width": 60.0, "wall": 0.25, "far": 8.0},
 }
 
