@@ -313,3 +313,20 @@ def test_interface_faces_carry_their_tractions_and_a_legend(tmp_path):
     length = np.linalg.norm(x[faces[:, 1]] - x[faces[:, 0]], axis=1)
     assert np.sum(tr["normal_traction"] * length) == pytest.approx(2000.0 * 10.0 * 0.5, rel=0.01)
     assert "interface_0_default" in m.field_data and "interface_1_cracks" in m.field_data
+
+
+def test_write_vtu_makes_its_folder_and_plots_take_the_api_names(tmp_path):
+    """Issue 36 (4, 5): ``write_vtu`` into a folder that does not exist yet
+    makes it; every field of ``element_state`` is in the file under its own
+    name, and ``plot_field`` takes those names."""
+    import meshio
+    from fdem.plot import plot_field
+
+    mesh = fdem.Mesh.rectangle(1.0, 1.0, 2, 2)
+    sim = fdem.Simulation(fdem.Model(mesh, material=fdem.Elastic(E=1e9, nu=0.25, rho=2000.0)))
+    target = tmp_path / "a" / "b" / "state.vtu"
+    sim.write_vtu(target)
+    cells = meshio.read(target).cell_data
+    assert all(k in cells for k in sim.element_state())
+    plot_field(sim, "equivalent_plastic_strain", tmp_path / "eps.png")
+    assert (tmp_path / "eps.png").stat().st_size > 1000

@@ -90,9 +90,10 @@ def cell_fields(sim: Simulation) -> dict[str, NDArray[Any]]:
         # only the raw value says more (how far past)
         "failure_factor": np.minimum(state["failure_factor"], 1.0),
         "failure_factor_raw": state["failure_factor"],
-        "plastic_strain": state["equivalent_plastic_strain"],
-        "plastic_strain_tensor": state["plastic_strain"],
-        "fracturing_strain": state["kappa"],
+        # the names of Simulation.element_state: one name per field
+        "equivalent_plastic_strain": state["equivalent_plastic_strain"],
+        "plastic_strain": state["plastic_strain"],
+        "kappa": state["kappa"],
         "crack_band": state["crack_band"],
         "crack_direction": state["crack_direction"],
         # density factor of mass scaling (1: physical; docs/mass_scaling.md)
@@ -189,11 +190,13 @@ def write_vtu(sim: Simulation, path: str | os.PathLike[str]) -> None:
     Cell blocks: the triangles with their fields, and (if any) the faces of
     joints and cracks as lines (cell data ``interface``: the index of their
     contact law; triangle fields are zero on lines and ``interface`` is -1 on
-    triangles), so ParaView can show or threshold them.
+    triangles), so ParaView can show or threshold them. The folder is
+    made if it does not exist.
     """
     import meshio
 
     path = os.fspath(path)
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     x = sim.positions()
     # excavated elements are left out: they are no longer part of the model
     keep = sim.active()
