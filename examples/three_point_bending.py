@@ -93,21 +93,10 @@ def beam_mesh(size: float, *, seed: int = 0) -> fdem.Mesh:
         gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
         gmsh.option.setNumber("Mesh.Algorithm", 6)
         gmsh.model.mesh.generate(2)
-        node_tags, coords, _ = gmsh.model.mesh.getNodes()
-        index = {int(t): k for k, t in enumerate(node_tags)}
-        points = np.asarray(coords).reshape(-1, 3)[:, :2]
-        _, tri_nodes = gmsh.model.mesh.getElementsByType(2)
-        tri = np.array([index[int(t)] for t in tri_nodes], dtype=np.int64).reshape(-1, 3)
+        mesh = fdem.Mesh.from_gmsh()
     finally:
         gmsh.finalize()
-    used = np.unique(tri)
-    renumber = -np.ones(len(points), dtype=np.int64)
-    renumber[used] = np.arange(len(used))
-    tri, points = renumber[tri], points[used]
-    p = points[tri]
-    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
-    clockwise = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] < 0
-    tri[clockwise] = tri[clockwise][:, ::-1]
+    points = mesh.points
     x, y = points[:, 0], points[:, 1]
     tol = 1e-9
     node_sets = {
@@ -115,7 +104,7 @@ def beam_mesh(size: float, *, seed: int = 0) -> fdem.Mesh:
         "right_support": np.flatnonzero((np.abs(x - x1) < tol) & (y < tol)),
         "load": np.flatnonzero((np.abs(x - xc) <= PAD + tol) & (y > DEPTH - tol)),
     }
-    return fdem.Mesh(points, tri, node_sets=node_sets).reordered()
+    return mesh.with_sets(node_sets=node_sets).reordered()
 
 
 def model(size: float = 0.01, *, insert_at: float | None = None, check_every: int | None = None) -> fdem.Model:

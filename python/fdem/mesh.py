@@ -503,6 +503,38 @@ class Mesh:
         return cls.polygon(np.column_stack([center[0] + r * np.cos(a), center[1] + r * np.sin(a)]), s)
 
     @classmethod
+    def from_gmsh(cls, curves: Mapping[str, int] | None = None) -> Mesh:
+        """The triangles of the model gmsh holds now (``gmsh`` initialised,
+        the mesh generated), as a Mesh: nodes no triangle uses (geometry
+        points) are dropped and the rest renumbered in gmsh's order, and
+        clockwise triangles are turned counter-clockwise. ``curves`` names
+        gmsh curve tags whose line elements become facet sets.
+
+        For meshes built in a script with gmsh's API; :meth:`read` reads a
+        file written by gmsh (with physical groups) instead.
+        """
+        import gmsh
+
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        index = {int(t): k for k, t in enumerate(tags)}
+        pts = np.asarray(coords).reshape(-1, 3)[:, :2]
+        _, tri_nodes = gmsh.model.mesh.getElementsByType(2)
+        tri = np.array([index[int(t)] for t in tri_nodes], dtype=np.int64).reshape(-1, 3)
+        facet_sets = {}
+        for name, curve in (curves or {}).items():
+            _, _, nodes = gmsh.model.mesh.getElements(1, curve)
+            facet_sets[name] = np.array([index[int(t)] for t in nodes[0]], dtype=np.int64).reshape(-1, 2)
+        used = np.unique(tri)
+        renum = -np.ones(len(pts), dtype=np.int64)
+        renum[used] = np.arange(len(used))
+        tri = renum[tri]
+        p = pts[used][tri]
+        e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+        clockwise = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] < 0
+        tri[clockwise] = tri[clockwise][:, ::-1]
+        return cls(pts[used], tri, facet_sets={k: renum[v] for k, v in facet_sets.items()})
+
+    @classmethod
     def read(cls, path: str | os.PathLike[str], *, joints: Sequence[str] = (), sliver: float = 0.2) -> Mesh:
         """Reads a triangle mesh with meshio (gmsh ``.msh``, ``.vtu``, …).
 
@@ -675,24 +707,6 @@ def gmsh_rectangle(
         gmsh.model.addPhysicalGroup(2, [surf], name="body")
         gmsh.option.setNumber("Mesh.Algorithm", 6)
         gmsh.model.mesh.generate(2)
-        tags, coords, _ = gmsh.model.mesh.getNodes()
-        index = {int(t): k for k, t in enumerate(tags)}
-        pts = np.asarray(coords).reshape(-1, 3)[:, :2]
-        _, tri_nodes = gmsh.model.mesh.getElementsByType(2)
-        tri = np.vectorize(index.__getitem__)(np.asarray(tri_nodes, dtype=np.int64)).reshape(-1, 3)
-        facet_sets = {}
-        for name, line in zip(("bottom", "right", "top", "left"), lines, strict=True):
-            _, _, nodes = gmsh.model.mesh.getElements(1, line)
-            facet_sets[name] = np.vectorize(index.__getitem__)(np.asarray(nodes[0], dtype=np.int64)).reshape(-1, 2)
+        return Mesh.from_gmsh(dict(zip(("bottom", "right", "top", "left"), lines, strict=True)))
     finally:
         gmsh.finalize()
-    used = np.unique(tri)
-    renum = -np.ones(len(pts), dtype=np.int64)
-    renum[used] = np.arange(len(used))
-    tri = renum[tri]
-    p = pts[used][tri]
-    cw = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 2, 0] - p[:, 0, 0]) * (
-        p[:, 1, 1] - p[:, 0, 1]
-    ) < 0
-    tri[cw] = tri[cw][:, [0, 2, 1]]
-    return Mesh(pts[used], tri, facet_sets={k: renum[v] for k, v in facet_sets.items()})

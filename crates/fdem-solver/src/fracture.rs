@@ -398,24 +398,40 @@ impl Simulation {
             }
             (g, [c[0] / n.max(1.0), c[1] / n.max(1.0)])
         };
+        if which.is_empty() {
+            return;
+        }
+        // each copy of a split node: the elements' pull on it, then, in
+        // one pass over the bonds in their order, that of the bonds it
+        // already has (copy → pull, centroid of its elements)
+        let mut others: Vec<(u32, Vec2, Vec2)> =
+            which.iter().flat_map(|(_, c)| c.iter().map(|&v| (v, pull(v)))).map(|(v, (g, c))| (v, g, c)).collect();
+        others.sort_unstable_by_key(|e| e.0);
+        let new_bond = |k: usize| which.iter().any(|(r, _)| r.contains(&k));
+        for (k, bond) in fr.bonds.iter().enumerate() {
+            let [a, b] = bond.nodes;
+            let (ia, ib) = (others.binary_search_by_key(&a, |e| e.0), others.binary_search_by_key(&b, |e| e.0));
+            if (ia.is_err() && ib.is_err()) || new_bond(k) {
+                continue;
+            }
+            let f = bond.force(x[a as usize], x[b as usize]);
+            if let Ok(i) = ib {
+                others[i].1 = [others[i].1[0] + f[0], others[i].1[1] + f[1]];
+            }
+            if let Ok(i) = ia {
+                others[i].1 = [others[i].1[0] - f[0], others[i].1[1] - f[1]];
+            }
+        }
         for (range, copies) in which {
             let m = copies.len();
             let at = |p: u32| copies.iter().position(|&c| c == p);
-            let (mut g, centre): (Vec<Vec2>, Vec<Vec2>) = copies.iter().map(|&c| pull(c)).unzip();
-            // the bonds the copies already have pull on them too
-            for (k, bond) in fr.bonds.iter().enumerate() {
-                if range.contains(&k) {
-                    continue;
-                }
-                let [a, b] = bond.nodes;
-                let f = bond.force(x[a as usize], x[b as usize]);
-                if let Some(i) = at(b) {
-                    g[i] = [g[i][0] + f[0], g[i][1] + f[1]];
-                }
-                if let Some(i) = at(a) {
-                    g[i] = [g[i][0] - f[0], g[i][1] - f[1]];
-                }
-            }
+            let (g, centre): (Vec<Vec2>, Vec<Vec2>) = copies
+                .iter()
+                .map(|&c| {
+                    let e = others[others.binary_search_by_key(&c, |e| e.0).expect("a copy")];
+                    (e.1, e.2)
+                })
+                .unzip();
             // the family's bonds join its copies (they were made between them)
             let edges: Option<Vec<(usize, usize)>> =
                 fr.bonds[range.clone()].iter().map(|b| Some((at(b.nodes[0])?, at(b.nodes[1])?))).collect();
