@@ -381,7 +381,7 @@ class Model:
         levels: int = 64,
     ) -> Model:
         """Heterogeneous rock: multiplies the tensile strength ``ft``, the
-        cohesion ``c`` and the fracture energy ``Gf`` of each element's
+        cohesion ``c`` and the fracture energies ``Gf`` and ``GII`` of each element's
         Mohr–Coulomb–Rankine material by a random factor of mean 1 and
         coefficient of variation ``cv`` (:func:`fdem.heterogeneity.strength_factors`:
         ``distribution`` ``"weibull"`` or ``"lognormal"``, independent per
@@ -425,7 +425,8 @@ class Model:
                 base = self._materials[key[0]]
                 assert isinstance(base, MohrCoulombRankine)
                 variants[key] = len(self._materials)
-                self._materials.append(replace(base, ft=base.ft * w, c=base.c * w, Gf=base.Gf * w))
+                gii = None if base.GII is None else base.GII * w
+                self._materials.append(replace(base, ft=base.ft * w, c=base.c * w, Gf=base.Gf * w, GII=gii))
             new[e] = variants[key]
         self._element_material = new
         return self

@@ -5,21 +5,39 @@
 //! (nodal failure factor `F̄ < 1`) still owes the fracture energy
 //! `(1 − F̄)² G_f` per unit length: the part of the linear softening curve
 //! the band has not yet travelled. A bond ties the two copies of the split
-//! node with a penalty spring and gives it back: traction `t = k (1 − D) d`
-//! for the opening vector `d = x_b − x_a`, with the damage `D` driven by the
-//! largest opening `δ_max = max |d|` so that the traction follows the
-//! linear envelope
+//! node with a penalty spring `k` and gives it back.
+//!
+//! **Mixed mode** (bonds made since checkpoint format 9; docs/fracture.md,
+//! "Mixed-mode bonds"). The opening `d = x_b − x_a` splits along the
+//! crack's normal `n` into an opening `δ_n = d·n` and a slip `δ_s = d·t`.
+//! Tension and slip soften with one damage `D`; compression is never
+//! damaged (a closed crack pushes back whatever its damage):
 //!
 //! ```text
-//! t_env(δ) = t₀ (δ_c − δ) / (δ_c − δ₀),   δ₀ = t₀ / k ≤ δ ≤ δ_c,
+//! t_n = (1 − D) k δ_n  (δ_n > 0),   t_n = k δ_n  (δ_n ≤ 0),   t_s = (1 − D) k δ_s.
 //! ```
 //!
-//! from the strength left, `t₀ = f_t (1 − F̄)`, to zero at
-//! `δ_c = 2 G_f (1 − F̄) / f_t`. The area under the envelope is
-//! `½ t₀ δ_c = (1 − F̄)² G_f`: band and bond together dissipate `G_f`.
+//! Strengths: `T = f_t (1 − F̄)` in tension, `S = c (1 − F̄) + σ_c tan φ` in
+//! shear with the compression the bond carries, `σ_c = k ⟨−δ_n⟩` (Mohr–
+//! Coulomb, the material's `c` and `φ`). Along the current mode (`cos β =
+//! ⟨δ_n⟩/δ_m`, `sin β = |δ_s|/δ_m`, `δ_m = √(⟨δ_n⟩² + δ_s²)`) damage starts
+//! where the tractions meet the quadratic criterion `(t_n/T)² + (t_s/S)² =
+//! 1`, at `δ_m⁰ = 1 / (k √((cos β / T)² + (sin β / S)²))`, and the traction
+//! falls linearly to zero at `δ_m^f = 2 G_c / (k δ_m⁰)` with the mode's
+//! fracture energy `G_c = G_I cos²β + G_II sin²β` (Camanho & Dávila 2002;
+//! Benzeggagh & Kenane 1996 with exponent 1). `D` is the largest damage so
+//! far. Pure opening dissipates `G_I = ½ T δ_c`, pure slip `G_II`, at any
+//! normal stress: under compression `S` grows and the slip at failure
+//! shrinks.
 //!
-//! The law is isotropic in `d` (mode II costs what mode I does); a broken
-//! bond is dropped and the faces interact by contact alone.
+//! **Isotropic** (bonds restored from a format ≤ 8 file, `mode` `None`):
+//! traction `t = k (1 − D) d`, `D` driven by the largest opening
+//! `δ_max = max |d|` along the linear envelope from `t₀` at `δ₀ = t₀/k` to
+//! zero at `δ_c`: mode II costs what mode I does.
+//!
+//! Either way `½ t₀ δ_c = (1 − F̄)² G_f` in pure opening: band and bond
+//! together dissipate `G_f`. A broken bond is dropped and the faces interact
+//! by contact alone.
 
 use crate::Vec2;
 
@@ -48,6 +66,70 @@ pub struct Bond {
     /// bonds (format 8), so it is not part of this type's serial form.
     #[serde(skip)]
     pub offset: Vec2,
+    /// The mixed-mode law and its damage; `None`: the isotropic law of a
+    /// bond restored from a format ≤ 8 checkpoint. Checkpoints keep it
+    /// beside the bonds (format 9).
+    #[serde(skip)]
+    pub mode: Option<MixedMode>,
+}
+
+/// The mixed-mode part of a bond: its crack's normal, shear strength and
+/// mode-II fracture energy, and its damage (module notes).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MixedMode {
+    /// Unit normal of the crack (global frame), from `a`'s side to `b`'s:
+    /// `δ_n = (x_b − x_a + offset)·n > 0` opens the crack. Fixed when the
+    /// crack is inserted (a bond lives until its crack has opened or slid
+    /// by tens of µm, over which its pieces turn little).
+    pub normal: Vec2,
+    /// Shear strength `c (1 − F̄)` (Pa) at zero normal stress.
+    pub cohesion: f64,
+    /// Friction coefficient `tan φ` (−) of the strength's pressure term.
+    pub friction: f64,
+    /// Mode-II fracture energy `G_II (1 − F̄)²` (J/m²) the bond dissipates
+    /// in pure slip.
+    pub shear_energy: f64,
+    /// Damage `D` (0 to 1), the largest so far.
+    pub damage: f64,
+}
+
+/// The linear envelope of the current mode, in the mixed-mode opening
+/// `δ_m` (m): damage onset `δ_m⁰` and final opening `δ_m^f`.
+#[derive(Clone, Copy, Debug)]
+struct Envelope {
+    onset: f64,
+    last: f64,
+}
+
+impl Envelope {
+    /// Damage `δ_m^f (δ − δ_m⁰) / (δ (δ_m^f − δ_m⁰))` at opening `delta`
+    /// (m): zero before onset, one at `δ_m^f`.
+    #[inline]
+    fn damage(&self, delta: f64) -> f64 {
+        if delta <= self.onset {
+            0.0
+        } else if delta >= self.last {
+            1.0
+        } else {
+            self.last * (delta - self.onset) / (delta * (self.last - self.onset))
+        }
+    }
+
+    /// Energy (J/m²) dissipated, along this mode, once the damage is `d`:
+    /// the area under the envelope up to the opening at which the damage is
+    /// `d`, less the elastic energy held there; `G_c` at `d = 1`.
+    fn dissipation(&self, k: f64, d: f64) -> f64 {
+        if d <= 0.0 {
+            return 0.0;
+        }
+        let (a, f) = (self.onset, self.last);
+        let span = f - a;
+        // the opening at which this mode's damage is d
+        let delta = if d >= 1.0 { f } else { (f * a / (f - d * span)).min(f) };
+        let peak = k * a;
+        let area = 0.5 * peak * a + peak * (delta - a) - 0.5 * peak * (delta - a).powi(2) / span;
+        area - 0.5 * peak * (f - delta) / span * delta
+    }
 }
 
 /// What one evaluation of a bond gives.
@@ -118,6 +200,19 @@ impl Bond {
     pub fn update(&mut self, xa: Vec2, xb: Vec2) -> BondResponse {
         let d = self.opening(xa, xb);
         let delta = (d[0] * d[0] + d[1] * d[1]).sqrt();
+        if let Some(mut m) = self.mode {
+            if delta > self.max_opening {
+                self.max_opening = delta;
+            }
+            let (dn, ds, env) = self.mode_of(&m, d);
+            let before = m.damage;
+            m.damage = m.damage.max(env.damage((dn.max(0.0) * dn.max(0.0) + ds * ds).sqrt()));
+            let dissipated =
+                (env.dissipation(self.stiffness, m.damage) - env.dissipation(self.stiffness, before)) * self.length;
+            self.mode = Some(m);
+            let (force, elastic) = self.mixed_force(&m, dn, ds);
+            return BondResponse { force, dissipated, elastic, broken: m.damage >= 1.0 };
+        }
         let before = self.dissipation(self.max_opening);
         if delta > self.max_opening {
             self.max_opening = delta;
@@ -138,7 +233,85 @@ impl Bond {
     /// updating it: at the positions of its last [`update`](Self::update),
     /// the force that update returned, to the bit (the same expressions).
     pub fn force(&self, xa: Vec2, xb: Vec2) -> Vec2 {
-        self.spring_force(self.current_secant(), self.opening(xa, xb))
+        let d = self.opening(xa, xb);
+        match &self.mode {
+            Some(m) => {
+                let (dn, ds, _) = self.mode_of(m, d);
+                self.mixed_force(m, dn, ds).0
+            }
+            None => self.spring_force(self.current_secant(), d),
+        }
+    }
+
+    /// The damage `D` (0 to 1) the bond holds.
+    pub fn damage(&self) -> f64 {
+        match &self.mode {
+            Some(m) => m.damage,
+            None => 1.0 - self.current_secant() / self.stiffness,
+        }
+    }
+
+    /// The factor (at most 1) that brings an opening `o` (m), taken from
+    /// zero damage, inside the elastic range: where the bond holds it
+    /// without damage starting (`δ₀ / |o|` for the isotropic law; the onset
+    /// of `o`'s mode over its mixed-mode opening for the mixed one).
+    pub fn elastic_scale(&self, o: Vec2) -> f64 {
+        let size = (o[0] * o[0] + o[1] * o[1]).sqrt();
+        let reach = match &self.mode {
+            Some(m) => {
+                let (dn, ds, env) = self.mode_of(&MixedMode { damage: 0.0, ..*m }, o);
+                let dm = (dn.max(0.0) * dn.max(0.0) + ds * ds).sqrt();
+                if dm <= env.onset {
+                    return 1.0;
+                }
+                env.onset / dm
+            }
+            None => self.elastic_limit() / size,
+        };
+        reach.min(1.0)
+    }
+
+    /// Opening `δ_n`, slip `δ_s` (m) and the current mode's envelope at the
+    /// opening `d` (module notes).
+    #[inline]
+    fn mode_of(&self, m: &MixedMode, d: Vec2) -> (f64, f64, Envelope) {
+        let n = m.normal;
+        let dn = d[0] * n[0] + d[1] * n[1];
+        // t = (−n_y, n_x)
+        let ds = d[1] * n[0] - d[0] * n[1];
+        let k = self.stiffness;
+        let open = dn.max(0.0);
+        let t0 = self.strength;
+        // the shear strength with the compression the bond carries; a
+        // material without cohesion still gives a bond a little, so that
+        // its envelope stays finite
+        let s0 = (m.cohesion + m.friction * k * (-dn).max(0.0)).max(1e-3 * t0);
+        let dm = (open * open + ds * ds).sqrt();
+        let (c, s) = if dm > 0.0 { (open / dm, ds.abs() / dm) } else { (1.0, 0.0) };
+        let onset = 1.0 / (k * ((c / t0).powi(2) + (s / s0).powi(2)).sqrt());
+        let g = 0.5 * t0 * self.final_opening * c * c + m.shear_energy * s * s;
+        let last = (2.0 * g / (k * onset)).max(onset * (1.0 + 1e-9));
+        (dn, ds, Envelope { onset, last })
+    }
+
+    /// Force on node `b` and elastic energy of the mixed-mode law at
+    /// opening `dn` and slip `ds` (m) with the damage `m` holds; nothing
+    /// once broken.
+    #[inline]
+    fn mixed_force(&self, m: &MixedMode, dn: f64, ds: f64) -> (Vec2, f64) {
+        if m.damage >= 1.0 {
+            return ([0.0; 2], 0.0);
+        }
+        let (k, keep) = (self.stiffness, 1.0 - m.damage);
+        let tn = if dn > 0.0 { keep * k * dn } else { k * dn };
+        let ts = keep * k * ds;
+        let n = m.normal;
+        let s = -self.length;
+        let force = [s * (tn * n[0] - ts * n[1]), s * (tn * n[1] + ts * n[0])];
+        let open = dn.max(0.0);
+        let closed = dn.min(0.0);
+        let elastic = 0.5 * k * (keep * (open * open + ds * ds) + closed * closed) * self.length;
+        (force, elastic)
     }
 
     /// The opening the law acts on, `x_b − x_a + offset` (m).
@@ -179,6 +352,7 @@ mod tests {
             final_opening: 1e-4,
             max_opening: 0.0,
             offset: [0.0; 2],
+            mode: None,
         }
     }
 
@@ -245,6 +419,164 @@ mod tests {
             let kept = b;
             assert_eq!(b.force(xa, xb), r.force);
             assert_eq!(b, kept);
+        }
+    }
+
+    /// A mixed-mode bond: T = 2 MPa, δ_c = 0.1 mm (G_I = 100 J/m²), S = 5 MPa
+    /// at zero normal stress, tan φ = 0.8, G_II = 400 J/m², crack normal
+    /// along (0.6, 0.8).
+    fn mixed() -> Bond {
+        Bond {
+            mode: Some(MixedMode {
+                normal: [0.6, 0.8],
+                cohesion: 5e6,
+                friction: 0.8,
+                shear_energy: 400.0,
+                damage: 0.0,
+            }),
+            ..bond()
+        }
+    }
+
+    /// Drives `b` along openings `(δ_n, δ_s)` (crack frame) and returns the
+    /// dissipated energy, the largest normal and shear tractions (Pa) and
+    /// whether it broke.
+    fn drive(b: &mut Bond, path: impl Iterator<Item = (f64, f64)>) -> (f64, f64, f64, bool) {
+        let n = b.mode.expect("mixed").normal;
+        let (mut total, mut tn_max, mut ts_max, mut broken) = (0.0, 0.0_f64, 0.0_f64, false);
+        for (dn, ds) in path {
+            let d = [dn * n[0] - ds * n[1], dn * n[1] + ds * n[0]];
+            let r = b.update([0.0; 2], d);
+            total += r.dissipated;
+            // traction on b's face, in the crack frame
+            let t = [-r.force[0] / b.length, -r.force[1] / b.length];
+            tn_max = tn_max.max(t[0] * n[0] + t[1] * n[1]);
+            ts_max = ts_max.max((t[1] * n[0] - t[0] * n[1]).abs());
+            broken |= r.broken;
+        }
+        (total, tn_max, ts_max, broken)
+    }
+
+    fn ramp(to: f64, steps: usize) -> impl Iterator<Item = f64> {
+        (0..=steps).map(move |i| to * i as f64 / steps as f64)
+    }
+
+    /// Pure opening: the traction peaks at T and the bond dissipates
+    /// `G_I ℓ = ½ T δ_c ℓ`, exactly (the closed form of the linear
+    /// envelope, any step size).
+    #[test]
+    fn mixed_pure_opening_dissipates_g_i() {
+        let mut b = mixed();
+        let (w, tn, ts, broken) = drive(&mut b, ramp(1.2e-4, 300).map(|x| (x, 0.0)));
+        assert!(broken);
+        let expected = 0.5 * 2e6 * 1e-4 * b.length;
+        assert!((w - expected).abs() < 1e-9 * expected, "{w} vs {expected}");
+        assert!((tn - 2e6).abs() < 2e6 * 1e-2, "peak normal traction {tn}");
+        assert!(ts < 1e-9 * tn, "shear traction {ts} in pure opening");
+    }
+
+    /// Pure slip at zero normal stress: the traction peaks at S = c and
+    /// the bond dissipates `G_II ℓ`, whichever way it slides.
+    #[test]
+    fn mixed_pure_slip_dissipates_g_ii() {
+        for sign in [1.0, -1.0] {
+            let mut b = mixed();
+            // G_II / S: δ_s^f = 2 · 400 / 5e6 = 0.16 mm
+            let (w, tn, ts, broken) = drive(&mut b, ramp(sign * 2e-4, 4000).map(|x| (0.0, x)));
+            assert!(broken);
+            let expected = 400.0 * b.length;
+            assert!((w - expected).abs() < 1e-9 * expected, "{w} vs {expected}");
+            assert!((ts - 5e6).abs() < 5e6 * 1e-3, "peak shear traction {ts}");
+            assert!(tn < 1e-9 * ts, "normal traction {tn} in pure slip");
+        }
+    }
+
+    /// Under a compression σ_c the bond is stronger in shear, S = c +
+    /// σ_c tan φ (Mohr–Coulomb), breaks at a smaller slip, still
+    /// dissipates G_II, and its compression is not damaged.
+    #[test]
+    fn mixed_compression_strengthens_shear() {
+        let k = 1e12;
+        for sigma in [0.0, 2e6, 10e6] {
+            let mut b = mixed();
+            let dn = -sigma / k;
+            let (w, _, ts, broken) = drive(&mut b, ramp(2e-4, 8000).map(|x| (dn, x)));
+            assert!(broken);
+            let strength = 5e6 + 0.8 * sigma;
+            assert!((ts - strength).abs() < strength * 2e-3, "σ_c {sigma}: peak {ts} vs {strength}");
+            let expected = 400.0 * b.length;
+            assert!((w - expected).abs() < 1e-9 * expected, "σ_c {sigma}: {w} vs {expected}");
+        }
+        // half damaged in slip, then pushed shut: the full stiffness pushes back
+        let mut b = mixed();
+        drive(&mut b, ramp(1e-4, 1000).map(|x| (0.0, x)));
+        let d = b.mode.expect("mixed").damage;
+        assert!(d > 0.3 && d < 1.0, "damage {d}");
+        let (_, _, _, _) = drive(&mut b, std::iter::once((-1e-6, 0.0)));
+        let f = b.force([0.0; 2], [-0.6e-6, -0.8e-6]);
+        // the force on b pushes it back to its side of the crack (along n)
+        let push = (f[0] * 0.6 + f[1] * 0.8) / b.length;
+        assert!((push - k * 1e-6).abs() < 1e-6 * k * 1e-6, "compression {push}");
+    }
+
+    /// A proportional path at mode angle β: damage starts where the
+    /// tractions meet the quadratic criterion (t_n/T)² + (t_s/S)² = 1,
+    /// and the bond dissipates `G_I cos²β + G_II sin²β`.
+    #[test]
+    fn mixed_proportional_path_follows_the_interaction() {
+        for beta in [0.3_f64, 0.8, 1.2] {
+            let mut b = mixed();
+            let (c, s) = (beta.cos(), beta.sin());
+            let mut onset = None;
+            let n = b.mode.expect("mixed").normal;
+            // steps of 1 nm: a twentieth of a per cent of the onset opening
+            for x in ramp(3e-4, 300_000) {
+                let d = [x * c * n[0] - x * s * n[1], x * c * n[1] + x * s * n[0]];
+                let before = b;
+                let r = b.update([0.0; 2], d);
+                if onset.is_none() && b.mode.expect("mixed").damage > 0.0 {
+                    // tractions of the last undamaged state
+                    let f = before.force([0.0; 2], d);
+                    let t = [-f[0] / b.length, -f[1] / b.length];
+                    onset =
+                        Some(((t[0] * n[0] + t[1] * n[1]) / 2e6).powi(2) + ((t[1] * n[0] - t[0] * n[1]) / 5e6).powi(2));
+                }
+                if r.broken {
+                    break;
+                }
+            }
+            let q = onset.expect("damage started");
+            assert!((q - 1.0).abs() < 2e-3, "β {beta}: criterion {q} at onset");
+        }
+        for beta in [0.3_f64, 0.8, 1.2] {
+            let mut b = mixed();
+            let (c, s) = (beta.cos(), beta.sin());
+            let (w, _, _, broken) = drive(&mut b, ramp(3e-4, 30000).map(|x| (x * c, x * s)));
+            assert!(broken);
+            let expected = (100.0 * c * c + 400.0 * s * s) * b.length;
+            assert!((w - expected).abs() < 1e-9 * expected, "β {beta}: {w} vs {expected}");
+        }
+    }
+
+    /// `force` repeats the last update bit for bit for the mixed law too,
+    /// and `elastic_scale` keeps an offset inside the elastic range.
+    #[test]
+    fn mixed_force_repeats_and_offsets_stay_elastic() {
+        let mut b = mixed();
+        let xa = [0.1, -0.2];
+        for (i, &delta) in [0.3e-5, 0.6e-4, 0.2e-4, 0.9e-4].iter().enumerate() {
+            let xb = [xa[0] + 0.3 * delta + 1e-7 * i as f64, xa[1] - 0.9 * delta];
+            let r = b.update(xa, xb);
+            assert_eq!(b.force(xa, xb), r.force);
+        }
+        for o in [[3e-6, 0.0], [0.0, 1e-5], [-2e-6, 4e-6], [1e-9, 1e-9]] {
+            let mut fresh = mixed();
+            let k = fresh.elastic_scale(o);
+            assert!(k > 0.0 && k <= 1.0);
+            fresh.offset = [o[0] * k, o[1] * k];
+            let r = fresh.update([0.0; 2], [0.0; 2]);
+            assert!(r.dissipated <= 1e-12 * r.elastic, "offset {o:?}: {}", r.dissipated);
+            assert!(fresh.damage() < 1e-9);
         }
     }
 

@@ -24,7 +24,7 @@ pub mod narrow;
 pub mod surface;
 
 pub use broad::BroadPhase;
-pub use cohesive::{Bond, BondResponse};
+pub use cohesive::{Bond, BondResponse, MixedMode};
 pub use law::{InterfaceLaw, LawError};
 pub use narrow::{ContactState, Dashpot, NodeContact};
 pub use surface::{Surface, SurfaceFacet};

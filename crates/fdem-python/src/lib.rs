@@ -87,7 +87,8 @@ fn get_f64(d: &Bound<'_, PyDict>, index: usize, key: &str) -> PyResult<f64> {
 
 /// A material from the dict the Python layer builds (`Material._kernel_dict`):
 /// `kind`, `rho`, `E`, `nu`, and for `mohr_coulomb_rankine` also `c`, `phi`
-/// and `psi` (degrees; converted to radians here), `ft`, `Gf`, `crack_band`.
+/// and `psi` (degrees; converted to radians here), `ft`, `Gf`, `GII`,
+/// `crack_band`.
 fn material_from_dict(index: usize, d: &Bound<'_, PyDict>) -> PyResult<MaterialSpec> {
     let kind: String =
         d.get_item("kind")?.ok_or_else(|| value_error(format!("material {index}: missing kind")))?.extract()?;
@@ -101,6 +102,7 @@ fn material_from_dict(index: usize, d: &Bound<'_, PyDict>) -> PyResult<MaterialS
                 dilation: get_f64(d, index, "psi")?.to_radians(),
                 tensile_strength: get_f64(d, index, "ft")?,
                 fracture_energy: get_f64(d, index, "Gf")?,
+                shear_fracture_energy: get_f64(d, index, "GII")?,
                 crack_band: match band.as_str() {
                     "oliver" => CrackBand::Oliver,
                     "equivalent" => CrackBand::Equivalent,
@@ -796,7 +798,9 @@ impl PySimulation {
     /// `nodes` (k, 2) int64, `length` (m), `strength` t₀ (Pa),
     /// `final_opening` δ_c (m), `max_opening` (m), `damage` (0–1), `offset`
     /// (k, 2) (m, the opening with which each bond took over the force
-    /// through its node when its crack was inserted), as a dict of arrays.
+    /// through its node when its crack was inserted), `normal` (k, 2) (the
+    /// crack normal of a mixed-mode bond, zero for the isotropic bonds of
+    /// an older checkpoint), as a dict of arrays.
     fn bonds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         guard(|| {
             let b = self.sim.bonds();
@@ -808,9 +812,12 @@ impl PySimulation {
             d.set_item("strength", col(&|b| b.strength))?;
             d.set_item("final_opening", col(&|b| b.final_opening))?;
             d.set_item("max_opening", col(&|b| b.max_opening))?;
-            d.set_item("damage", col(&|b| 1.0 - b.secant(b.max_opening) / b.stiffness))?;
+            d.set_item("damage", col(&|b| b.damage()))?;
             let offsets: Vec<f64> = b.iter().flat_map(|b| b.offset).collect();
             d.set_item("offset", Array2::from_shape_vec((b.len(), 2), offsets).expect("shape").into_pyarray(py))?;
+            // the crack normal of a mixed-mode bond; zero for an isotropic one
+            let normals: Vec<f64> = b.iter().flat_map(|b| b.mode.map_or([0.0; 2], |m| m.normal)).collect();
+            d.set_item("normal", Array2::from_shape_vec((b.len(), 2), normals).expect("shape").into_pyarray(py))?;
             Ok(d)
         })
     }

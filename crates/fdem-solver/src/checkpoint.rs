@@ -60,8 +60,9 @@ pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
 /// an older build would continue: its arithmetic differs in the last bits).
 /// Format 6 appends [`Format6`] (the contact dashpots of the node pass),
 /// format 7 then [`Format7`] (the elements' lineage), format 8 then
-/// [`Format8`] (the bonds' offsets and the local damping).
-pub const FORMAT_VERSION: u32 = 8;
+/// [`Format8`] (the bonds' offsets and the local damping), format 9 then
+/// [`Format9`] (the bonds' mixed-mode laws and the materials' `G_II`).
+pub const FORMAT_VERSION: u32 = 9;
 const HEADER: usize = 40;
 
 /// Why a checkpoint could not be written or read.
@@ -352,6 +353,28 @@ impl Format8 {
     }
 }
 
+/// What format 9 added, written after [`Format8`]: each bond's mixed-mode
+/// law and damage ([`Bond::mode`](fdem_contact::Bond::mode)), in the order
+/// of the bonds, and each material's mode-II fracture energy. A file of an
+/// older format restores its bonds with the isotropic law they were made
+/// with (so a run continues as the older build ran it) and gives its
+/// materials `G_II = G_f` (the default of `fdem.MohrCoulombRankine`) for
+/// the bonds of cracks inserted after the restore.
+#[derive(Serialize, Deserialize)]
+struct Format9 {
+    modes: Vec<Option<fdem_contact::MixedMode>>,
+    shear_fracture_energy: Vec<f64>,
+}
+
+impl Format9 {
+    fn of(s: &Simulation) -> Self {
+        Format9 {
+            modes: s.fracture.as_ref().map_or_else(Vec::new, |f| f.bonds.iter().map(|b| b.mode).collect()),
+            shear_fracture_energy: s.materials.iter().map(|m| m.shear_fracture_energy).collect(),
+        }
+    }
+}
+
 fn le_u32(b: &[u8]) -> u32 {
     u32::from_le_bytes([b[0], b[1], b[2], b[3]])
 }
@@ -375,6 +398,7 @@ impl Simulation {
         state.extend(postcard::to_stdvec(&Format6::of(self)).expect("format-6 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format7::of(self)).expect("format-7 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format8::of(self)).expect("format-8 data is serialisable"));
+        state.extend(postcard::to_stdvec(&Format9::of(self)).expect("format-9 data is serialisable"));
         let mut out = Vec::with_capacity(HEADER + state.len() + user.len());
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -465,8 +489,48 @@ impl Simulation {
         } else {
             (None, rest)
         };
+        let (modes, rest) = if version >= 9 {
+            let (o, rest) = postcard::take_from_bytes::<Format9>(rest).map_err(decode)?;
+            (Some(o), rest)
+        } else {
+            (None, rest)
+        };
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
+        }
+        match modes {
+            Some(Format9 { modes, shear_fracture_energy }) => {
+                let bonds = owned.fracture.as_mut().map_or(&mut [][..], |f| &mut f.bonds[..]);
+                let valid = |m: &fdem_contact::MixedMode| {
+                    let unit = (m.normal[0].hypot(m.normal[1]) - 1.0).abs() < 1e-9;
+                    unit && m.cohesion >= 0.0
+                        && m.friction >= 0.0
+                        && m.shear_energy > 0.0
+                        && m.shear_energy.is_finite()
+                        && (0.0..=1.0).contains(&m.damage)
+                };
+                if modes.len() != bonds.len() || modes.iter().flatten().any(|m| !valid(m)) {
+                    return Err(CheckpointError::Invalid("the bonds' mixed-mode laws do not match the bonds".into()));
+                }
+                for (b, m) in bonds.iter_mut().zip(modes) {
+                    b.mode = m;
+                }
+                if shear_fracture_energy.len() != owned.materials.len()
+                    || shear_fracture_energy.iter().any(|g| !(*g >= 0.0 && g.is_finite()))
+                {
+                    return Err(CheckpointError::Invalid(
+                        "the materials' mode-II fracture energies are invalid".into(),
+                    ));
+                }
+                for (m, g) in owned.materials.iter_mut().zip(shear_fracture_energy) {
+                    m.shear_fracture_energy = g;
+                }
+            }
+            None => {
+                for m in &mut owned.materials {
+                    m.shear_fracture_energy = m.plastic.as_ref().map_or(0.0, |l| l.fracture_energy);
+                }
+            }
         }
         let mut released = Vec::new();
         if let Some(Format8 { offsets, local_damping, stage_ramps, released: r }) = offsets {

@@ -3,7 +3,7 @@
 //! inserted at the nodes that have reached 1, and the state is carried
 //! through the topology edits.
 
-use fdem_contact::Bond;
+use fdem_contact::{Bond, MixedMode};
 use fdem_element::kinematics::{deformation_gradient, polar_rotation, reference_inverse, signed_area};
 use fdem_element::{ReferenceShape, Vec2};
 use fdem_fracture::{
@@ -120,6 +120,22 @@ fn add_bond_force(force: &mut [Vec2], index_of: &[u32], [a, b]: [u32; 2], f: Vec
     }
 }
 
+/// The law of the bonds across a crack inserted at one node
+/// ([`Simulation::remaining_softening`]).
+#[derive(Clone, Copy, Debug)]
+struct BondSeed {
+    /// Tensile strength `t₀` (Pa).
+    strength: f64,
+    /// Opening `δ_c` (m) at which the tensile traction reaches zero.
+    final_opening: f64,
+    /// Shear strength at zero normal stress (Pa).
+    cohesion: f64,
+    /// `tan φ` (−).
+    friction: f64,
+    /// Mode-II fracture energy (J/m²).
+    shear_energy: f64,
+}
+
 /// How well insertions have kept mass and momentum (DESIGN §4.4: both are
 /// unchanged by an insertion).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -225,7 +241,7 @@ impl Simulation {
             fr.node_factor[i] >= fr.insert_at && self.nodes.mass[i] > 0.0 && driven(p)
         }));
         let mut edits = Edits::default();
-        let mut owed: Vec<Option<(f64, f64)>> = Vec::new();
+        let mut owed: Vec<Option<BondSeed>> = Vec::new();
         if !candidates.is_empty() {
             for &p in &candidates {
                 fr.node_angle[p as usize] = direction_angle(fr.node_direction[p as usize]);
@@ -318,20 +334,27 @@ impl Simulation {
         // pieces of the split node that face each other across them
         let mut preload = Vec::new();
         for (k, (_, f)) in family.iter().enumerate() {
-            let Some((strength, final_opening)) = owed[k] else { continue };
+            let Some(seed) = owed[k] else { continue };
             let first = fr.bonds.len();
             for (i, &u) in f.iter().enumerate() {
                 for &v in &f[i + 1..] {
-                    let length = self.shared_crack_length(u, v);
+                    let (length, doubled) = self.shared_crack(u, v);
                     if length > 0.0 {
                         fr.bonds.push(Bond {
                             nodes: [u, v],
                             length,
                             stiffness,
-                            strength,
-                            final_opening,
+                            strength: seed.strength,
+                            final_opening: seed.final_opening,
                             max_opening: 0.0,
                             offset: [0.0; 2],
+                            mode: Some(MixedMode {
+                                normal: self.crack_normal(u, v, doubled),
+                                cohesion: seed.cohesion,
+                                friction: seed.friction,
+                                shear_energy: seed.shear_energy,
+                                damage: 0.0,
+                            }),
                         });
                     }
                 }
@@ -449,8 +472,7 @@ impl Simulation {
                 if o[0] * across[0] + o[1] * across[1] <= 0.0 {
                     continue;
                 }
-                let size = (o[0] * o[0] + o[1] * o[1]).sqrt();
-                let cap = (bond.elastic_limit() / size).min(1.0);
+                let cap = bond.elastic_scale(o);
                 bond.offset = [o[0] * cap, o[1] * cap];
             }
         }
@@ -460,7 +482,15 @@ impl Simulation {
     /// faces at `v` (the same segment seen from its two sides: far ends of
     /// the same ancestor) (m): the tributary length of a bond `(u, v)`.
     fn shared_crack_length(&self, u: u32, v: u32) -> f64 {
-        let Some(crack_law) = self.contact.as_ref().map(|c| c.crack_law) else { return 0.0 };
+        self.shared_crack(u, v).0
+    }
+
+    /// [`Self::shared_crack_length`] and those faces' direction now, as the
+    /// length-weighted sum of their doubled-angle unit vectors (so that the
+    /// two faces of a straight crack through `u`, which leave it in
+    /// opposite directions, add up).
+    fn shared_crack(&self, u: u32, v: u32) -> (f64, Vec2) {
+        let Some(crack_law) = self.contact.as_ref().map(|c| c.crack_law) else { return (0.0, [0.0; 2]) };
         let s = &self.surface;
         let faces = |node: u32| {
             let bi = s.index_of[node as usize];
@@ -470,10 +500,50 @@ impl Simulation {
                 (far, f.length)
             })
         };
-        faces(u)
-            .filter(|&(far, _)| faces(v).any(|(g, _)| self.ancestor[g as usize] == self.ancestor[far as usize]))
-            .map(|(_, length)| 0.5 * length)
-            .sum()
+        let x = &self.nodes.x;
+        let (mut length, mut doubled) = (0.0, [0.0; 2]);
+        for (far, l) in
+            faces(u).filter(|&(far, _)| faces(v).any(|(g, _)| self.ancestor[g as usize] == self.ancestor[far as usize]))
+        {
+            length += 0.5 * l;
+            let t = [x[far as usize][0] - x[u as usize][0], x[far as usize][1] - x[u as usize][1]];
+            let s = t[0] * t[0] + t[1] * t[1];
+            if s > 0.0 {
+                // (cos 2θ, sin 2θ) of t, weighted by the face's length
+                doubled[0] += l * (t[0] * t[0] - t[1] * t[1]) / s;
+                doubled[1] += l * 2.0 * t[0] * t[1] / s;
+            }
+        }
+        (length, doubled)
+    }
+
+    /// The unit normal of the crack between copies `u` and `v` of a split
+    /// node, from `u`'s side to `v`'s: normal to the faces' mean direction
+    /// (`doubled`, from [`Self::shared_crack`]), turned towards the
+    /// centroid of `v`'s elements from that of `u`'s. The mixed-mode bond
+    /// between them measures opening along it and slip across it.
+    fn crack_normal(&self, u: u32, v: u32, doubled: Vec2) -> Vec2 {
+        let half = 0.5 * doubled[1].atan2(doubled[0]);
+        let mut n = [-half.sin(), half.cos()];
+        let (cu, cv) = (self.star_centre(u), self.star_centre(v));
+        if n[0] * (cv[0] - cu[0]) + n[1] * (cv[1] - cu[1]) < 0.0 {
+            n = [-n[0], -n[1]];
+        }
+        n
+    }
+
+    /// The mean of the vertices of the active elements around node `p`
+    /// (m): which side of a crack its piece lies on.
+    fn star_centre(&self, p: u32) -> Vec2 {
+        let (x, conn) = (&self.nodes.x, &self.elems.conn);
+        let (mut c, mut k) = ([0.0; 2], 0.0_f64);
+        for &item in self.node_elems.row(p as usize) {
+            for &q in &conn[(item / 3) as usize] {
+                c = [c[0] + x[q as usize][0], c[1] + x[q as usize][1]];
+                k += 1.0;
+            }
+        }
+        [c[0] / k.max(1.0), c[1] / k.max(1.0)]
     }
 
     /// Records every element's failure factor for the next check's "still
@@ -529,15 +599,17 @@ impl Simulation {
         }
     }
 
-    /// The strength `t₀ = f_t (1 − F)` (Pa) and final opening
-    /// `δ_c = 2 G_f (1 − F) / f_t` (m) of a bond across a crack inserted at
-    /// node `p`, with `F`, `f_t` and `G_f` those of the most softened element
-    /// around `p`: the bond continues that element's softening curve, so
-    /// band and bond together dissipate `G_f` per unit crack length, and it
-    /// is no stronger than any element beside it, so the crack, not the
-    /// band, takes up the opening (docs/fracture.md). `None` once that
-    /// element has fully softened (the paper's traction-free crack).
-    fn remaining_softening(&self, fr: &FractureModel, p: u32) -> Option<(f64, f64)> {
+    /// The law of a bond across a crack inserted at node `p`: strength
+    /// `t₀ = f_t (1 − F)` (Pa) and final opening `δ_c = 2 G_f (1 − F) / f_t`
+    /// (m) in tension, shear strength `c (1 − F)` and `tan φ`, and
+    /// mode-II energy `G_II (1 − F)²`, with `F` and the parameters those of
+    /// the most softened element around `p`: the bond continues that
+    /// element's softening curve, so band and bond together dissipate `G_f`
+    /// per unit crack length, and it is no stronger than any element beside
+    /// it, so the crack, not the band, takes up the opening
+    /// (docs/fracture.md). `None` once that element has fully softened (the
+    /// paper's traction-free crack).
+    fn remaining_softening(&self, fr: &FractureModel, p: u32) -> Option<BondSeed> {
         let mut most: Option<(f64, usize)> = None;
         for &item in self.node_elems.row(p as usize) {
             let e = (item / 3) as usize;
@@ -550,9 +622,16 @@ impl Simulation {
         if f >= 1.0 {
             return None;
         }
-        let law = self.materials[self.elems.material[e] as usize].plastic.as_ref()?;
-        let (ft, gf) = (law.tensile_strength, law.fracture_energy);
-        Some((ft * (1.0 - f), 2.0 * gf * (1.0 - f) / ft))
+        let material = &self.materials[self.elems.material[e] as usize];
+        let law = material.plastic.as_ref()?;
+        let (ft, gf, r) = (law.tensile_strength, law.fracture_energy, 1.0 - f);
+        Some(BondSeed {
+            strength: ft * r,
+            final_opening: 2.0 * gf * r / ft,
+            cohesion: law.cohesion * r,
+            friction: law.friction.tan(),
+            shear_energy: material.shear_fracture_energy * r * r,
+        })
     }
 
     /// Carries the state through the edits: new nodes (copies keep position,
@@ -846,6 +925,7 @@ mod tests {
             dilation: 5f64.to_radians(),
             tensile_strength: 1e6,
             fracture_energy: 70.0,
+            shear_fracture_energy: 70.0,
             crack_band: CrackBand::Oliver,
         };
         ModelSpec {

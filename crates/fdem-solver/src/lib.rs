@@ -51,7 +51,7 @@ pub const RENUMBER_INTERVAL: u64 = 1000;
 pub use checkpoint::{CheckpointError, FORMAT_VERSION as CHECKPOINT_FORMAT};
 pub use energy::Energies;
 pub use error::{RunError, SetupError};
-pub use fdem_contact::Bond;
+pub use fdem_contact::{Bond, MixedMode};
 pub use fdem_fracture::FractureParams;
 pub use fdem_material::{CrackBand, PlasticState};
 pub use fdem_mesh::validate as validate_mesh;

@@ -51,20 +51,26 @@ pub fn material_point(
     let elastic = Elastic::new(material.young, material.poisson).map_err(|e| bad(0, e))?;
     let law = match material.law {
         LawSpec::Elastic => None,
-        LawSpec::MohrCoulombRankine { cohesion, friction, dilation, tensile_strength, fracture_energy, crack_band } => {
-            Some(
-                MohrCoulombRankine::new(
-                    elastic,
-                    cohesion,
-                    friction,
-                    dilation,
-                    tensile_strength,
-                    fracture_energy,
-                    crack_band,
-                )
-                .map_err(|e| bad(0, e))?,
+        LawSpec::MohrCoulombRankine {
+            cohesion,
+            friction,
+            dilation,
+            tensile_strength,
+            fracture_energy,
+            crack_band,
+            ..
+        } => Some(
+            MohrCoulombRankine::new(
+                elastic,
+                cohesion,
+                friction,
+                dilation,
+                tensile_strength,
+                fracture_energy,
+                crack_band,
             )
-        }
+            .map_err(|e| bad(0, e))?,
+        ),
     };
     if !(crack_band > 0.0 && crack_band.is_finite()) {
         return Err(SetupError::Invalid(format!("element_size = {crack_band} must be positive")));
@@ -170,6 +176,7 @@ mod tests {
                 dilation: 5f64.to_radians(),
                 tensile_strength: 2e6,
                 fracture_energy: 50.0,
+                shear_fracture_energy: 50.0,
                 crack_band: CrackBand::Oliver,
             },
         }

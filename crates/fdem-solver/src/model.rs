@@ -35,8 +35,14 @@ pub enum LawSpec {
         dilation: f64,
         /// Tensile strength `f_t` (Pa).
         tensile_strength: f64,
-        /// Fracture energy `G_f` (N/m).
+        /// Fracture energy `G_f` (N/m): mode I, of the crack band and of
+        /// the bonds' opening.
         fracture_energy: f64,
+        /// Mode-II fracture energy `G_II` (N/m) of the cohesive bonds
+        /// across young cracks: what a bond dissipates in pure slip
+        /// (docs/fracture.md, "Mixed-mode bonds"; the continuum's shear
+        /// law is perfectly plastic and has none).
+        shear_fracture_energy: f64,
         /// Crack-band rule.
         crack_band: CrackBand,
     },

@@ -23,6 +23,11 @@ pub(crate) struct Material {
     pub density: f64,
     pub elastic: Elastic,
     pub plastic: Option<MohrCoulombRankine>,
+    /// Mode-II fracture energy `G_II` (J/m²) of the bonds across its
+    /// young cracks (0 for an elastic material). Checkpoints keep it
+    /// beside the materials (format 9).
+    #[serde(skip)]
+    pub shear_fracture_energy: f64,
 }
 
 /// The reference edge vectors of an element (its shape in the co-rotational

@@ -47,6 +47,7 @@ impl Simulation {
                     tensile_strength,
                     fracture_energy,
                     crack_band,
+                    ..
                 } => Some(
                     MohrCoulombRankine::new(
                         elastic,
@@ -68,7 +69,21 @@ impl Simulation {
                 };
                 return Err(SetupError::Material { index, error });
             }
-            materials.push(Material { density: ms.density, elastic, plastic });
+            let shear_fracture_energy = match ms.law {
+                LawSpec::MohrCoulombRankine { shear_fracture_energy: g, .. } => {
+                    if !(g > 0.0 && g.is_finite()) {
+                        let error = fdem_material::ParameterError {
+                            parameter: "GII",
+                            value: g,
+                            requirement: "mode-II fracture energy must be positive".into(),
+                        };
+                        return Err(SetupError::Material { index, error });
+                    }
+                    g
+                }
+                LawSpec::Elastic => 0.0,
+            };
+            materials.push(Material { density: ms.density, elastic, plastic, shear_fracture_energy });
         }
         if spec.element_material.len() != m {
             return invalid(format!("element_material has {} entries for {m} elements", spec.element_material.len()));

@@ -167,6 +167,13 @@ fn format8_len(sim: &Simulation) -> usize {
     varint(sim.bonds().len()) + 16 * sim.bonds().len() + 8 + 2
 }
 
+/// Bytes of the format-9 block of a run without bonds: an empty list of
+/// bond laws and each material's `G_II` (a varint count and one f64 each).
+fn format9_len(sim: &Simulation, materials: usize) -> usize {
+    assert!(sim.bonds().is_empty());
+    1 + varint(materials) + 8 * materials
+}
+
 /// The plate with contact on its own surface (a dashpot of damping ratio
 /// 0.1).
 fn plate_with_contact(n: usize) -> ModelSpec {
@@ -191,7 +198,16 @@ fn a_format_1_file_still_reads_with_physical_masses() {
     let v1 = downgrade(
         &v3,
         1,
-        varint(m) + 8 * m + 1 + 8 + 2 + format4_len(m) + format6_len(0) + format7_len(&a) + format8_len(&a),
+        varint(m)
+            + 8 * m
+            + 1
+            + 8
+            + 2
+            + format4_len(m)
+            + format6_len(0)
+            + format7_len(&a)
+            + format8_len(&a)
+            + format9_len(&a, 1),
     );
     let (mut b, user) = Simulation::from_checkpoint_bytes(&v1, 1).unwrap();
     assert_eq!(user, b"meta");
@@ -213,7 +229,7 @@ fn a_format_2_file_with_contact_reads_without_corner_contacts() {
     // two lists of nb: an empty memory is 22 bytes (facet u32::MAX as a
     // 5-byte varint, two f64, `None`), an empty contact 70 (facet, 7 f64,
     // a bool); then the format-4, format-6 and format-7 blocks
-    let blocks = format4_len(a.n_elements()) + format6_len(nb) + format7_len(&a) + format8_len(&a);
+    let blocks = format4_len(a.n_elements()) + format6_len(nb) + format7_len(&a) + format8_len(&a) + format9_len(&a, 1);
     let v2 = downgrade(&v3, 2, 2 * varint(nb) + nb * (22 + 70) + blocks);
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v2, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v3, "format 2 read back differs");
@@ -236,6 +252,7 @@ fn a_format_4_file_keeps_its_crack_directions() {
         dilation: 0.1,
         tensile_strength: 1e5,
         fracture_energy: 10.0,
+        shear_fracture_energy: 10.0,
         crack_band: CrackBand::Oliver,
     };
     let top = (n * (n + 1)) as u32;
@@ -251,7 +268,7 @@ fn a_format_4_file_keeps_its_crack_directions() {
     assert!(codes.iter().filter(|&&c| c != 0.0).count() >= cracked);
     // the same bytes marked as format 4: each code is read as an angle
     let v6 = a.checkpoint_bytes(b"");
-    let v4 = downgrade(&v6, 4, format6_len(0) + format7_len(&a) + format8_len(&a));
+    let v4 = downgrade(&v6, 4, format6_len(0) + format7_len(&a) + format8_len(&a) + format9_len(&a, 1));
     let (b, _) = Simulation::from_checkpoint_bytes(&v4, 1).unwrap();
     let pi = std::f64::consts::PI;
     for (e, s) in b.plastic_states().iter().enumerate() {
@@ -270,7 +287,7 @@ fn a_format_5_file_reads_without_its_dashpots_and_a_format_6_file_with_them() {
     // tests/test_caving_resume.py).
     let mut a = Simulation::new(plate_with_contact(6), 1).unwrap();
     let v6 = a.checkpoint_bytes(b"");
-    let v5 = downgrade(&v6, 5, format6_len(4 * 6) + format7_len(&a) + format8_len(&a));
+    let v5 = downgrade(&v6, 5, format6_len(4 * 6) + format7_len(&a) + format8_len(&a) + format9_len(&a, 1));
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v5, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v6, "format 5 read back differs");
     a.step(40).unwrap();
@@ -309,6 +326,7 @@ fn bonded_bar() -> ModelSpec {
             dilation: 5f64.to_radians(),
             tensile_strength,
             fracture_energy: 70.0,
+            shear_fracture_energy: 70.0,
             crack_band: CrackBand::Oliver,
         },
     };
@@ -387,7 +405,7 @@ fn a_format_6_file_reads_without_lineage_and_a_bad_lineage_is_refused() {
     let v7 = a.checkpoint_bytes(b"");
     let m = a.n_elements();
     assert!(a.element_parents().iter().enumerate().all(|(e, &p)| p as usize == e));
-    let v6 = downgrade(&v7, 6, format7_len(&a) + format8_len(&a));
+    let v6 = downgrade(&v7, 6, format7_len(&a) + format8_len(&a) + format9_len(&a, 1));
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v6, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v7, "format 6 read back differs");
     // nothing to place: every element is one of the model's
@@ -396,7 +414,7 @@ fn a_format_6_file_reads_without_lineage_and_a_bad_lineage_is_refused() {
     // of the state, a one-byte varint here)
     let s_len = u64::from_le_bytes(v7[16..24].try_into().unwrap()) as usize;
     let mut bad = v7.clone();
-    let last = 40 + s_len - 1 - format8_len(&a);
+    let last = 40 + s_len - 1 - format8_len(&a) - format9_len(&a, 1);
     assert_eq!(bad[last] as usize, m - 1);
     bad[last] = m as u8;
     let crc = crc32fast::hash(&bad[40..]);
@@ -415,16 +433,18 @@ fn a_format_7_file_reads_with_slack_bonds_and_bad_offsets_are_refused() {
     a.step(10).unwrap();
     let v8 = a.checkpoint_bytes(b"");
     assert!(a.bonds().is_empty());
-    let v7 = downgrade(&v8, 7, format8_len(&a));
+    let v7 = downgrade(&v8, 7, format8_len(&a) + format9_len(&a, 1));
     let (b, _) = Simulation::from_checkpoint_bytes(&v7, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v8, "format 7 read back differs");
     // one offset where there is no bond: the count (the byte before the
     // local damping's f64 and the two empty lists) made 1 and two f64 put
     // after it
     let s_len = u64::from_le_bytes(v8[16..24].try_into().unwrap()) as usize;
-    let mut state = v8[40..40 + s_len - 10].to_vec();
+    let f9 = format9_len(&a, 1);
+    let mut state = v8[40..40 + s_len - f9 - 10].to_vec();
     *state.last_mut().unwrap() = 1;
     state.extend_from_slice(&[0u8; 16 + 8 + 2]);
+    state.extend_from_slice(&v8[40 + s_len - f9..40 + s_len]);
     let mut bad = v8[..40].to_vec();
     bad.extend_from_slice(&state);
     bad[16..24].copy_from_slice(&(state.len() as u64).to_le_bytes());
@@ -433,4 +453,54 @@ fn a_format_7_file_reads_with_slack_bonds_and_bad_offsets_are_refused() {
     reseal(&mut bad);
     let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
     assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("offsets")), "{e}");
+}
+
+/// Format 9 appends each bond's mixed-mode law (an option tag and six f64)
+/// and each material's `G_II` (one f64). A format-8 file restores its
+/// bonds with the isotropic law they were made with and gives its
+/// materials `G_II = G_f`; a bond law whose damage lies outside [0, 1]
+/// is refused.
+#[test]
+fn a_format_8_file_reads_with_isotropic_bonds_and_bad_bond_laws_are_refused() {
+    let mut a = Simulation::new(bonded_bar(), 1).unwrap();
+    while a.bonds().is_empty() {
+        a.step(10).unwrap();
+        assert!(a.steps() < 5000, "no crack opened with its bond");
+    }
+    let nb = a.bonds().len();
+    assert!(a.bonds().iter().all(|b| b.mode.is_some()), "new bonds are mixed-mode");
+    // the bar is pulled along x and cracks across it (straight and
+    // kinked): each bond's normal points from its first node's side to its
+    // second's, so that the crack opens (δ_n > 0)
+    let mut probe = Simulation::from_checkpoint_bytes(&a.checkpoint_bytes(b""), 1).unwrap().0;
+    probe.step(100).unwrap();
+    let x = probe.positions();
+    for bond in probe.bonds().iter() {
+        let n = bond.mode.unwrap().normal;
+        let [p, q] = bond.nodes.map(|v| v as usize);
+        let dn = (x[q][0] - x[p][0] + bond.offset[0]) * n[0] + (x[q][1] - x[p][1] + bond.offset[1]) * n[1];
+        assert!((n[0].hypot(n[1]) - 1.0).abs() < 1e-12, "normal {n:?}");
+        assert!(dn > 0.0, "bond {:?} closed by {dn} m along its normal", bond.nodes);
+    }
+    let v9 = a.checkpoint_bytes(b"");
+    let f9 = varint(nb) + nb * (1 + 6 * 8) + varint(2) + 2 * 8;
+    let v8 = downgrade(&v9, 8, f9);
+    let (mut b, _) = Simulation::from_checkpoint_bytes(&v8, 1).unwrap();
+    assert!(b.bonds().iter().all(|b| b.mode.is_none()), "a format-8 file's bonds are isotropic");
+    assert_eq!(b.bonds().len(), nb);
+    // and so does a file it writes
+    let (c, _) = Simulation::from_checkpoint_bytes(&b.checkpoint_bytes(b""), 1).unwrap();
+    assert!(c.bonds().iter().all(|b| b.mode.is_none()));
+    b.step(200).unwrap();
+    assert!(b.energies().residual().is_finite());
+    // the last bond's damage made 2
+    let s_len = u64::from_le_bytes(v9[16..24].try_into().unwrap()) as usize;
+    let at = 40 + s_len - (varint(2) + 2 * 8) - 8;
+    let mut bad = v9.clone();
+    bad[at..at + 8].copy_from_slice(&2.0f64.to_le_bytes());
+    let crc = crc32fast::hash(&bad[40..]);
+    bad[32..36].copy_from_slice(&crc.to_le_bytes());
+    reseal(&mut bad);
+    let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
+    assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("mixed-mode")), "{e}");
 }

@@ -165,6 +165,7 @@ fn expanding(points: Vec<[f64; 2]>, triangles: Vec<[u64; 3]>, check_every: Optio
                 dilation: 0.0,
                 tensile_strength: 1e5,
                 fracture_energy: 10.0,
+                shear_fracture_energy: 10.0,
                 crack_band: fdem_solver::CrackBand::Oliver,
             },
         }],
