@@ -25,20 +25,11 @@ pub mod surface;
 
 pub use broad::BroadPhase;
 pub use cohesive::{Bond, BondResponse, MixedMode};
+pub use fdem_core::{Vec2, CHUNK, NONE};
 pub use law::{InterfaceLaw, LawError};
 pub use narrow::{ContactState, Dashpot, NodeContact};
 pub use surface::{Surface, SurfaceFacet};
 
-/// A 2D vector `[x, y]`.
-pub type Vec2 = [f64; 2];
-
-/// Boundary nodes (or facets) per parallel work item; fixed so that sums do
-/// not depend on the thread count.
-pub const CHUNK: usize = 1024;
-
 /// Two adjacent facets whose normals differ by less than 30° continue one
 /// surface; more is a corner.
 pub(crate) const SMOOTH_COS: f64 = 0.866;
-
-/// Marks "none" in index arrays.
-pub const NONE: u32 = u32::MAX;

@@ -22,8 +22,7 @@ pub mod kinematics;
 pub mod stability;
 pub mod tensor;
 
-/// A 2D vector `[x, y]` (m, m/s or N depending on use).
-pub type Vec2 = [f64; 2];
+pub use fdem_core::Vec2;
 
 /// The three nodes of one triangle, counter-clockwise.
 pub type Tri<T> = [T; 3];

@@ -14,8 +14,6 @@
 pub mod insertion;
 pub mod nodal;
 
+pub use fdem_core::Vec2;
 pub use insertion::{plan, Edits, FractureParams, NewNode, NodeFailure};
 pub use nodal::{direction_angle, doubled_direction, nodal_failure};
-
-/// A 2D vector `[x, y]`.
-pub type Vec2 = [f64; 2];

@@ -1,5 +1,6 @@
 //! Nodal failure factor and crack direction (paper eqs. 2.22–2.23).
 
+use fdem_core::CHUNK;
 use fdem_mesh::Csr;
 use rayon::prelude::*;
 
@@ -32,7 +33,7 @@ pub fn nodal_failure(
     factor: &mut [f64],
     direction: &mut [[f64; 2]],
 ) {
-    factor.par_iter_mut().zip(direction.par_iter_mut()).enumerate().with_min_len(1024).for_each(|(p, (f, d))| {
+    factor.par_iter_mut().zip(direction.par_iter_mut()).enumerate().with_min_len(CHUNK).for_each(|(p, (f, d))| {
         let (mut wa, mut wf, mut c, mut s) = (0.0, 0.0, 0.0, 0.0);
         for &item in node_elems.row(p) {
             let e = (item / 3) as usize;

@@ -10,7 +10,7 @@ use fdem_fracture::{insertion::altitude, insertion::quality, plan, Edits, Fractu
 use fdem_mesh::generate::triangulate;
 use fdem_mesh::node_elements;
 
-type V = [f64; 2];
+type V = fdem_fracture::Vec2;
 
 /// xorshift64*: a small deterministic generator (no dependency).
 struct Rng(u64);

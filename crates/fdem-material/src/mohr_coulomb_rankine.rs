@@ -200,6 +200,11 @@ impl Geometry {
         let d = [self.e2[0] - self.e1[0], self.e2[1] - self.e1[1]];
         self.e1[0].hypot(self.e1[1]).max(self.e2[0].hypot(self.e2[1])).max(d[0].hypot(d[1]))
     }
+
+    /// Diameter of the circle of the same area, `√(4A/π)` (m).
+    pub fn equivalent_diameter(&self) -> f64 {
+        (4.0 * self.area() / std::f64::consts::PI).sqrt()
+    }
 }
 
 /// The result of one update.
@@ -350,7 +355,19 @@ impl MohrCoulombRankine {
     pub fn band_width(&self, geometry: &Geometry, angle: f64) -> f64 {
         match self.crack_band {
             CrackBand::Oliver => geometry.width_along(angle),
-            CrackBand::Equivalent => (4.0 * geometry.area() / std::f64::consts::PI).sqrt(),
+            CrackBand::Equivalent => geometry.equivalent_diameter(),
+        }
+    }
+
+    /// The widest crack band `h_c` (m) the law's rule gives an element of
+    /// shape `geometry`, over every crack direction: the longest edge for
+    /// [`CrackBand::Oliver`], the one width of [`CrackBand::Equivalent`].
+    /// An element is fit for the law when this is at most
+    /// [`snap_back_size`](Self::snap_back_size).
+    pub fn largest_band_width(&self, geometry: &Geometry) -> f64 {
+        match self.crack_band {
+            CrackBand::Oliver => geometry.diameter(),
+            CrackBand::Equivalent => geometry.equivalent_diameter(),
         }
     }
 

@@ -449,6 +449,31 @@ fn softening_dissipates_the_fracture_energy() {
     assert!(law.failure_factor(&state) > 1.0 && s[0].abs() < 1e-6);
 }
 
+/// The crack-band rules on a 3-4-5 right triangle: Oliver's band is the
+/// width along the crack normal (3 m along x, 4 m along y) and at most the
+/// hypotenuse, 5 m; the equivalent band is `√(4A/π)` with `A = 6 m²`
+/// whatever the direction.
+#[test]
+fn crack_band_rules_give_the_triangle_widths() {
+    let geometry = Geometry { e1: [3.0, 0.0], e2: [0.0, 4.0] };
+    let e = Elastic::new(60e9, 0.25).unwrap();
+    let law = |rule| MohrCoulombRankine::new(e, 8e6, 55.0 * DEG, 9.0 * DEG, 1e6, 70.0, rule).unwrap();
+    let (oliver, equivalent) = (law(CrackBand::Oliver), law(CrackBand::Equivalent));
+    assert!((oliver.band_width(&geometry, 0.0) - 3.0).abs() < 1e-15);
+    assert!((oliver.band_width(&geometry, 90.0 * DEG) - 4.0).abs() < 1e-15);
+    assert_eq!(oliver.largest_band_width(&geometry), 5.0);
+    let hypotenuse = (-4.0f64).atan2(3.0);
+    assert!((oliver.band_width(&geometry, hypotenuse) - 5.0).abs() < 1e-14);
+    for k in 0..180 {
+        assert!(oliver.band_width(&geometry, k as f64 * DEG) <= 5.0 * (1.0 + 1e-15));
+    }
+    let h = (24.0 / std::f64::consts::PI).sqrt();
+    assert!((equivalent.largest_band_width(&geometry) - h).abs() < 1e-15);
+    for k in 0..180 {
+        assert_eq!(equivalent.band_width(&geometry, k as f64 * DEG), equivalent.largest_band_width(&geometry));
+    }
+}
+
 #[test]
 fn parameters_are_checked_by_name() {
     let e = Elastic::new(60e9, 0.25).unwrap();

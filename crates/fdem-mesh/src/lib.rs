@@ -28,7 +28,7 @@ pub type NodeId = u32;
 /// Element id.
 pub type ElemId = u32;
 /// A point `[x, y]` (m).
-pub type Point = [f64; 2];
+pub type Point = fdem_core::Vec2;
 
 /// Node→element incidence as a CSR list whose items encode
 /// `element * 3 + local vertex`, sorted by element id for each node.

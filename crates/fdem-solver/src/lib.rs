@@ -62,15 +62,10 @@ pub mod mesh {
     pub use fdem_mesh::generate::{triangulate, triangulate_uniform, GenerateError, Generated};
     pub use fdem_mesh::split::split_along_edges;
 }
+pub use fdem_core::CHUNK;
+pub(crate) use fdem_core::NONE;
 pub use loads::{Amplitude, Constraint, PressureLoad};
 pub use model::{
     ContactSpec, ExcavationStage, FractureSpec, InterfaceSpec, LawSpec, MaterialSpec, ModelSpec, Release, Settings,
 };
 pub use simulation::{ContactInfo, ContactStats, PhaseTimes, Simulation};
-
-/// Nodes or elements per parallel work item. Fixed, so that partial sums
-/// (and therefore results) do not depend on the thread count.
-pub const CHUNK: usize = 1024;
-
-/// Marks "none" in index arrays.
-pub(crate) const NONE: u32 = u32::MAX;

@@ -15,7 +15,7 @@ use crate::loads::Constraint;
 use crate::{CHUNK, NONE};
 
 /// Marks a node without constraint in `Nodes::bc`.
-pub(crate) const NO_BC: u32 = u32::MAX;
+pub(crate) const NO_BC: u32 = NONE;
 
 /// A material as the element pass uses it.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]

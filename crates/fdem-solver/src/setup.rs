@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use fdem_element::kinematics::{reference_inverse, signed_area};
 use fdem_element::lumped_mass;
-use fdem_material::{CrackBand, Elastic, MohrCoulombRankine, PlasticState};
+use fdem_material::{Elastic, MohrCoulombRankine, PlasticState};
 use fdem_mesh::{node_elements, validate};
 
 use crate::contact::ContactModel;
@@ -109,10 +109,7 @@ impl Simulation {
             })?;
             if let Some(law) = &materials[spec.element_material[e] as usize].plastic {
                 let g = passes::reference_geometry(&shape);
-                let size = match law.crack_band {
-                    CrackBand::Oliver => g.diameter(),
-                    CrackBand::Equivalent => (4.0 * g.area() / std::f64::consts::PI).sqrt(),
-                };
+                let size = law.largest_band_width(&g);
                 let limit = law.snap_back_size();
                 if size > limit {
                     return invalid(format!(

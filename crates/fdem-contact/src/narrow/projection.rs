@@ -1,0 +1,197 @@
+//! Facet geometry for the narrow phase: each facet's frame at the current
+//! positions ([`FacetFrame`]), the projection of a node on a facet and the
+//! test that the node lies behind it (within the end slack and the depth
+//! limit), a boundary node's outward normal, and the gap past a shallow
+//! convex corner of the surface.
+
+use rayon::prelude::*;
+
+use crate::surface::Surface;
+use crate::{Vec2, CHUNK, SMOOTH_COS};
+
+/// Slack on the projection parameter `ξ` (fraction of the facet): a node a
+/// little past the end of a surface still bears on its last facet (its
+/// projection clamped to the end). Without it, the end nodes of a joint
+/// whose two sides drift apart by round-off-sized shear (a micron) drop out
+/// of contact and the rock beside the joint's end carries nothing.
+/// The broad phase pads every facet box by this much of its length too, so
+/// that the whole region where the narrow phase accepts a contact is listed.
+pub(crate) const XI_SLACK: f64 = 0.05;
+
+/// Projection of point `s` on the facet `[a, b]`: `(ξ, g_n, n, t, L)`.
+#[inline(always)]
+pub fn project(s: Vec2, a: Vec2, b: Vec2) -> (f64, f64, Vec2, Vec2, f64) {
+    let frame = FacetFrame::of(a, b);
+    let (xi, gap) = frame.project(s, a);
+    (xi, gap, frame.normal(), frame.t, frame.len)
+}
+
+/// The current geometry of one facet: its unit tangent `t` (first node to
+/// second), length (m), the position of its first node and its depth limit
+/// (m, [`SurfaceFacet::depth`](crate::SurfaceFacet::depth)). Its outward
+/// normal is `n = (t_y, −t_x)`. One 48-byte record holds everything the
+/// candidate test reads, so that testing a candidate is one random read
+/// instead of three (the facet, its frame, its first node's position): the
+/// test is latency-bound in a fractured mesh, whose new nodes and elements
+/// lie far from their neighbours in memory. (It also held the facet nodes'
+/// velocities for a contact's relative velocity; read from the nodes
+/// instead, the 32 bytes fewer written for every facet in every step made
+/// the contact pass of a late step of the paper-scale caving run 5–15%
+/// faster: docs/contact.md.)
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FacetFrame {
+    /// Unit tangent.
+    pub t: Vec2,
+    /// Length (m).
+    pub len: f64,
+    /// Position of the first node (m).
+    pub a: Vec2,
+    /// Deepest penetration accepted behind the facet (m).
+    pub depth: f64,
+}
+
+impl Default for FacetFrame {
+    fn default() -> Self {
+        Self { t: [0.0; 2], len: 0.0, a: [0.0; 2], depth: f64::INFINITY }
+    }
+}
+
+impl FacetFrame {
+    /// The frame of the facet `[a, b]` (no depth limit, at rest).
+    #[inline(always)]
+    pub fn of(a: Vec2, b: Vec2) -> Self {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+        Self { t: [d[0] / len, d[1] / len], len, a, ..Self::default() }
+    }
+
+    /// Outward normal (unit).
+    #[inline(always)]
+    pub fn normal(&self) -> Vec2 {
+        [self.t[1], -self.t[0]]
+    }
+
+    /// Projection of point `s` on the facet starting at `a`: `(ξ, g_n)`,
+    /// the same numbers as [`project`].
+    #[inline(always)]
+    pub fn project(&self, s: Vec2, a: Vec2) -> (f64, f64) {
+        let (t, n) = (self.t, self.normal());
+        let r = [s[0] - a[0], s[1] - a[1]];
+        ((r[0] * t[0] + r[1] * t[1]) / self.len, r[0] * n[0] + r[1] * n[1])
+    }
+}
+
+/// Every facet's [`FacetFrame`] at positions `x` (parallel over fixed
+/// chunks), once per contact evaluation: the candidate
+/// tests, node normals and tributary lengths read them instead of
+/// recomputing a square root per use (each facet's frame was computed 5–6
+/// times per step before).
+pub fn facet_frames(surface: &Surface, x: &[Vec2], frames: &mut [FacetFrame]) {
+    frames.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
+        for (j, fr) in out.iter_mut().enumerate() {
+            let facet = &surface.facets[c * CHUNK + j];
+            let [a, b] = facet.nodes.map(|n| n as usize);
+            *fr = FacetFrame { depth: facet.depth, ..FacetFrame::of(x[a], x[b]) };
+        }
+    });
+}
+
+/// Outward normal of boundary node `b` (unit): the sum of its own facets'
+/// normals `(dy, −dx)` at the current positions.
+#[inline]
+pub(super) fn node_normal(surface: &Surface, frames: &[FacetFrame], b: usize) -> Vec2 {
+    let mut n = [0.0; 2];
+    for &k in surface.node_facets.row(b) {
+        let m = frames[k as usize].normal();
+        n[0] += m[0];
+        n[1] += m[1];
+    }
+    let len = (n[0] * n[0] + n[1] * n[1]).sqrt();
+    if len > 0.0 {
+        [n[0] / len, n[1] / len]
+    } else {
+        n
+    }
+}
+
+/// At a shallow convex corner of the surface (a turn of less than 30°), the
+/// signed gap (negative inside) of point `s` from the line of the facet
+/// that follows facet `f` past its end (`at_end`) or precedes it before its
+/// start; `None` at a concave or sharp corner (or without such a facet).
+/// Facets run with the body on their left, so a left turn is convex. Only
+/// shallow corners need this: there a contact slides on from one facet to
+/// the next without the entry check (rank 1 in `evaluate_node`); at a sharp
+/// corner the slack keeps two blocks' aligned corners in contact.
+#[inline]
+pub(super) fn corner_gap(
+    surface: &Surface,
+    x: &[Vec2],
+    frames: &[FacetFrame],
+    f: u32,
+    at_end: bool,
+    s: Vec2,
+) -> Option<f64> {
+    let [a, b] = surface.facets[f as usize].nodes;
+    let v = if at_end { b } else { a };
+    let bv = surface.index_of[v as usize];
+    let d = frames[f as usize].t;
+    // the turn from the first facet along the surface to the second: from
+    // `f` to the next one past its end, from the previous one to `f` before
+    // its start (sine and cosine)
+    let turn = |k: u32| {
+        let e = frames[k as usize].t;
+        let cross = d[0] * e[1] - d[1] * e[0];
+        (if at_end { cross } else { -cross }, d[0] * e[0] + d[1] * e[1])
+    };
+    // At a node where the body touches itself (four facets) two facets
+    // qualify; the one on the same wedge of the body turns most to the left
+    // (walking with the body on the left, the boundary of one wedge turns
+    // left of the other's). Chosen by geometry, not by index, so that it
+    // does not depend on the numbering.
+    let mut next = surface.node_facets.row(bv as usize).iter().copied().filter(|&k| {
+        let [p, q] = surface.facets[k as usize].nodes;
+        k != f && if at_end { p == v } else { q == v }
+    });
+    let angle = |k: u32| {
+        let (sin, cos) = turn(k);
+        sin.atan2(cos)
+    };
+    let mut k = next.next()?;
+    for other in next {
+        if angle(other) > angle(k) {
+            k = other;
+        }
+    }
+    let p = surface.facets[k as usize].nodes[0];
+    let e = frames[k as usize].t;
+    let turn = turn(k).0;
+    let smooth = d[0] * e[0] + d[1] * e[1] >= SMOOTH_COS;
+    (turn > 0.0 && smooth).then(|| frames[k as usize].project(s, x[p as usize]).1)
+}
+
+/// The projection test of a candidate: the node projects onto the facet
+/// within the end slack (`ξ`) and lies behind it, no deeper than its depth
+/// limit (`−depth ≤ gap < 0`). Written without short-circuits, so that a
+/// row of candidates is tested without a branch each.
+#[inline(always)]
+// a NaN gap passes here, as it always has; `&` instead of `&&` throughout
+#[allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_range_contains)]
+pub(super) fn projects_inside(xi: f64, gap: f64, depth: f64) -> bool {
+    (xi >= -XI_SLACK) & (xi <= 1.0 + XI_SLACK) & !(gap >= 0.0) & !(gap < -depth)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn projection_of_a_point_below_a_facet() {
+        // facet from (0,0) to (2,0): body above? No: body on the left of the
+        // direction +x, i.e. above; outward normal is −y.
+        let (xi, gap, n, t, len) = project([0.5, 0.1], [0.0, 0.0], [2.0, 0.0]);
+        assert_eq!((xi, len), (0.25, 2.0));
+        assert_eq!(n, [0.0, -1.0]);
+        assert_eq!(t, [1.0, 0.0]);
+        assert!((gap + 0.1).abs() < 1e-15); // 0.1 inside the body
+    }
+}

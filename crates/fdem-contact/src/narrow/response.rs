@@ -1,0 +1,177 @@
+//! The response of one contact on the facet the search chose: penalty
+//! springs sized by the node's tributary length, the normal dashpot's
+//! estimate on the last velocities, the elastic tangential gap carried over
+//! from the facet before, Coulomb friction with cohesion over the node's
+//! share of the interface (appendix D), and the energy the springs hold.
+
+use super::projection::projects_inside;
+use super::search::resumed_direction;
+use super::{ContactPartial, ContactState, Dashpot, FacetFrame, NarrowInputs, NodeContact};
+use crate::law::friction_update;
+use crate::surface::Surface;
+use crate::{Vec2, NONE};
+
+/// Tributary length (m) of boundary node `b` on a contact whose facet has
+/// normal `n`: half of each of the node's own facets, projected on the
+/// contact facet's line, `ℓ = ½ Σ_k L_k max(0, −m_k · n)` (`m_k` the
+/// facet's outward normal). A node inside an interface counts both halves,
+/// a corner node touching a flat face only its side on that face, and a
+/// crack face meeting a joint at an angle only its projection. The weight
+/// is continuous in the facets' orientation, so a crack inserted at a node,
+/// or a facet turning, changes the node's spring gradually; an
+/// all-or-nothing facing test made the spring of a joint node jump threefold
+/// at a crack insertion (measured on the block-caving case).
+#[inline]
+fn tributary(surface: &Surface, frames: &[FacetFrame], b: usize, n: Vec2) -> f64 {
+    surface
+        .node_facets
+        .row(b)
+        .iter()
+        .map(|&k| {
+            let m = frames[k as usize].normal();
+            0.5 * surface.facets[k as usize].length * (-(m[0] * n[0] + m[1] * n[1])).max(0.0)
+        })
+        .sum()
+}
+
+/// The length (m) over which boundary node `b`'s contact on facet `f`
+/// (outward normal `n`) carries the interface's cohesion: its tributary
+/// length (of its bearing face `face` at a corner, else of all its facets),
+/// each own facet's half counted in full where only this node's side
+/// presses on the other, and half where the other side's nodes press on
+/// this one's facet too (two-pass contact: both passes then carry the same
+/// stretch of interface, and each carries half of it).
+///
+/// Whether the other pass covers the half of own facet `k` is read from the
+/// geometry at this step: an end of the touched facet (the other body's
+/// nearest nodes) penetrates facet `k` within its span. Node on node, a
+/// coincident node penetrates both own facets at their shared vertex;
+/// nodes of one side between those of the other penetrate the facets they
+/// lie on; a block on one long facet of another body has no node of that
+/// body on its facets and carries all of `c ℓ` itself. With `½ c ℓ` for
+/// every node regardless, a block on a single long facet carried half its
+/// cohesion (issue 32: it slid at +0.50 m/s² against 1.36 m/s² due).
+#[inline]
+fn cohesive_length(inp: &NarrowInputs<'_>, b: usize, f: u32, n: Vec2, face: Option<u32>) -> f64 {
+    let frame = &inp.frames[f as usize];
+    let ends = [frame.a, [frame.a[0] + frame.len * frame.t[0], frame.a[1] + frame.len * frame.t[1]]];
+    let half = |k: u32| {
+        let own = &inp.frames[k as usize];
+        let m = own.normal();
+        let h = 0.5 * inp.surface.facets[k as usize].length * (-(m[0] * n[0] + m[1] * n[1])).max(0.0);
+        let covered = ends.iter().any(|&p| {
+            let (xi, gap) = own.project(p, own.a);
+            projects_inside(xi, gap, own.depth)
+        });
+        if covered {
+            0.5 * h
+        } else {
+            h
+        }
+    };
+    match face {
+        Some(k) => half(k),
+        None => inp.surface.node_facets.row(b).iter().map(|&k| half(k)).sum(),
+    }
+}
+
+/// The energy held in contact `c`'s springs (J/m) with the elastic
+/// tangential gap `elastic_gap` (its memory's): `½ α_n g² + ½ α_t g_tᵉ²`
+/// as [`respond`] counts it, with `α_n = f_s / (−g)` from the spring's
+/// normal force `f_s = −α_n g` (a contact's gap is negative) and `α_t =
+/// α_n k_t / k_n` (both springs share the node's tributary length).
+#[inline]
+pub(super) fn held_energy(inp: &NarrowInputs<'_>, c: &NodeContact, elastic_gap: f64) -> f64 {
+    let law = &inp.laws[inp.surface.facets[c.facet as usize].law as usize];
+    let depth = -c.gap;
+    let alpha_t = c.dashpot.spring / depth * (law.shear_stiffness / law.normal_stiffness);
+    0.5 * c.dashpot.spring * depth + 0.5 * alpha_t * elastic_gap * elastic_gap
+}
+
+/// The forces of one contact of boundary node `b` (mesh id `node`) on the
+/// facet chosen by `evaluate_node` (`evaluation.rs`; `best`: rank, facet,
+/// ξ, gap); `face` is the node's own facet that bears at a corner (`None`
+/// for a node on a smooth stretch, which bears with all its facets).
+#[inline]
+pub(super) fn respond(
+    inp: &NarrowInputs<'_>,
+    b: usize,
+    node: usize,
+    state: &mut ContactState,
+    best: (u8, u32, f64, f64),
+    face: Option<u32>,
+    acc: &mut ContactPartial,
+) -> NodeContact {
+    let (rank, f, xi, gap) = best;
+    let continues = rank == 1;
+    let xi = xi.clamp(0.0, 1.0);
+    let facet = &inp.surface.facets[f as usize];
+    let law = &inp.laws[facet.law as usize];
+    let (ia, ib) = (facet.nodes[0] as usize, facet.nodes[1] as usize);
+    let (n, t) = (inp.frames[f as usize].normal(), inp.frames[f as usize].t);
+    let (v, [va, vb]) = (inp.v, [inp.v[ia], inp.v[ib]]);
+    let vrel = [v[node][0] - (1.0 - xi) * va[0] - xi * vb[0], v[node][1] - (1.0 - xi) * va[1] - xi * vb[1]];
+    let gap_rate = vrel[0] * n[0] + vrel[1] * n[1];
+    // the node's springs: stiffness per unit area × its share of the
+    // contact; at a corner the bearing face's half, and the dashpot sees
+    // that face's share of the node's mass, so that the two contacts'
+    // dashpots together never exceed one on the whole node (the stable
+    // step's bound)
+    let (trib, ms) = match face {
+        None => (tributary(inp.surface, inp.frames, b, n), inp.mass[node]),
+        Some(k) => {
+            let m = inp.frames[k as usize].normal();
+            let half = 0.5 * inp.surface.facets[k as usize].length;
+            (half * (-(m[0] * n[0] + m[1] * n[1])).max(0.0), inp.mass[node] * half / inp.surface.tributary_max(b))
+        }
+    };
+    let (alpha_n, alpha_t) = (law.normal_stiffness * trib, law.shear_stiffness * trib);
+    // The dashpot is sized for the pair's relative motion: critical damping
+    // of a spring between two masses uses their reduced mass. Sizing it with
+    // the node's mass alone over-damps (explicitly: destabilises) a light
+    // facet node, e.g. a block corner under a heavier node.
+    let mf = (1.0 - xi) * inp.mass[ia] + xi * inp.mass[ib];
+    let m = if mf > 0.0 { ms * mf / (ms + mf) } else { ms };
+    let dashpot = law.damping_ratio * 2.0 * (alpha_n * m).sqrt();
+    let spring = -alpha_n * gap;
+    // the pair's effective mass along the normal, as an impulse moves the
+    // gap rate (a massless end moves with nothing: no term), for the
+    // estimate
+    let inv = |m: f64| if m > 0.0 { 1.0 / m } else { 0.0 };
+    let inverse_mass = inv(inp.mass[node]) + (1.0 - xi) * (1.0 - xi) * inv(inp.mass[ia]) + xi * xi * inv(inp.mass[ib]);
+    // the estimate of the dashpot on the last velocities, for the friction
+    // limit and the readouts; the node pass applies it on the predicted ones
+    let estimate = dashpot / (1.0 + dashpot * inp.dt * inverse_mass);
+    let normal_force = (spring - estimate * gap_rate).max(0.0);
+    // carry the elastic tangential gap, measured along the old facet's
+    // direction `d`, over to a neighbouring facet or a resumed contact
+    let carried = |d: Vec2| if d[0] * t[0] + d[1] * t[1] >= 0.0 { state.elastic_gap } else { -state.elastic_gap };
+    let elastic_gap = if state.facet == f {
+        state.elastic_gap
+    } else if state.facet != NONE && inp.surface.adjacent(state.facet, f) && continues {
+        let prev = &inp.surface.facets[state.facet as usize];
+        let (pa, pb) = (inp.x[prev.nodes[0] as usize], inp.x[prev.nodes[1] as usize]);
+        carried([pb[0] - pa[0], pb[1] - pa[1]])
+    } else if state.resumed != NONE {
+        carried(resumed_direction(inp, state.resumed))
+    } else {
+        0.0
+    };
+    let slip = inp.dt * (vrel[0] * t[0] + vrel[1] * t[1]);
+    let cohesion = if law.cohesion > 0.0 { law.cohesion * cohesive_length(inp, b, f, n, face) } else { 0.0 };
+    let (ft, new_gap, work) = friction_update(law, alpha_t, elastic_gap, slip, normal_force, cohesion);
+    *state = ContactState { facet: f, resumed: NONE, elastic_gap: new_gap, depth: -gap };
+    acc.contacts += 1;
+    acc.friction += work;
+    acc.stored += 0.5 * alpha_n * gap * gap + 0.5 * alpha_t * new_gap * new_gap;
+    NodeContact {
+        facet: f,
+        xi,
+        gap,
+        dashpot: Dashpot { normal: n, coefficient: dashpot, spring },
+        normal_force,
+        tangential_force: ft,
+        slipping: work > 0.0,
+        ends: facet.ends,
+    }
+}
