@@ -432,6 +432,31 @@ class Simulation:
         each one's interface law (0: free boundary)."""
         return self._core.surface_facets()
 
+    def crack_length(self, along: Any = None) -> float:
+        """Length of material the inserted cracks have cut (m, per unit
+        thickness): half the reference length of all crack faces (a crack
+        has two), so a crack is measured as it was cut, not as it opened.
+        With ``along`` (a direction ``(x, y)``), the cracks' projection on
+        that direction instead: ``½ Σ |t·e|`` over the faces, with ``t``
+        a face's reference vector and ``e`` the unit direction. Fracture
+        energy per unit crack length, the crack band's measure, uses the
+        projection on the line the crack runs along overall (a tension
+        bar's width, a beam's ligament): a crack zigzagging through
+        triangles is longer than the band it cuts. 0 without fracture."""
+        if self.model._contact is None:
+            return 0.0
+        facets, laws = self.surface_facets()
+        f = facets[laws == self.model._contact["crack"]]
+        x = self.reference_positions()
+        t = x[f[:, 1]] - x[f[:, 0]]
+        if along is None:
+            return 0.5 * float(np.hypot(t[:, 0], t[:, 1]).sum())
+        e = np.asarray(along, dtype=np.float64).reshape(2)
+        norm = float(np.hypot(*e))
+        if not (norm > 0 and math.isfinite(norm)):
+            raise ValueError(f"along = {along!r} must be a nonzero direction (x, y)")
+        return 0.5 * float(np.abs(t @ (e / norm)).sum())
+
     def insertion_audit(self) -> dict[str, float] | None:
         """The largest relative change of total ``mass`` and of linear
         ``momentum`` (over Σ m|v|) any crack insertion has caused so far;
