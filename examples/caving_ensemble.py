@@ -8,9 +8,12 @@ line across, lengths change by up to ±10% and orientations by up to ±2°.
 Every realisation (seed) is run with the joint friction at 25°, 33° (the
 paper's) and 41°; everything else is the quick case (4 m elements, the
 undercut every 0.06 s, to 0.8 s; docs/caving.md), except that the mesh is
-refined from the traces (``uniform_mesh=False``): the uniform 4 m mesh of
-perturbed traces leaves elements wider than the rock's snap-back limit
-(8.96 m) in 4 of 8 realisations, which the kernel refuses.
+refined from the traces (``uniform_mesh=False``), the mesh docs/ensembles.md
+measured it on. The uniform mesh now meshes every realisation within the
+rock's snap-back limit too (docs/meshing.md), but where two perturbed
+traces end on a third a few decimetres apart its worst triangle, and so
+the step, is 5 to 10 times shorter (2 of 8 realisations): refinement's
+step varies less (docs/caving.md, "Joint sets of one's own").
 
 Into ``--out``: ``runs.parquet`` (one row per run, fdem.ensemble),
 ``spread.csv`` (mean, standard deviation, least and largest of each

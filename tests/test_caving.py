@@ -547,3 +547,96 @@ def test_an_undercut_schedule_of_any_regions_and_times():
         caving_model(replace(case, regions=((0.05, -80.0, 80.0), (0.1, 0.0, 10.0))))
     with pytest.raises(ValueError, match=r"regions\[0\]"):
         replace(case, regions=((0.05, 10.0, 0.0),))
+
+
+def test_an_undercut_schedule_of_boxes_and_polygons(tmp_path):
+    """Issue 35 (2): an undercut schedule as any sequence of stages, each a
+    time and a region in model coordinates (a box or a polygon): a stage
+    removes the elements still standing whose centroids lie in its region
+    (a half-open box [xmin, xmax) × [ymin, ymax), a polygon by the
+    even-odd rule, matplotlib's Path the reference). Boxes over the
+    support layer with the symmetric schedule's widths and times build the
+    same model and run to the same bits through run_caving, which keeps
+    its probes, metrics, figures and checkpoint; a bad value names its
+    field; the case round-trips through its JSON file."""
+    import json
+    from dataclasses import replace
+
+    from fdem.caving import UndercutStage
+    from matplotlib.path import Path as MplPath
+
+    base = replace(CavingCase.quick(), undercut=40.0, until=0.12, output_every=0.06)
+    top = BOTTOM + base.support
+    boxes = tuple(
+        UndercutStage(base.start + (k - 1) * base.interval, box=(-k * base.step, BOTTOM, k * base.step, top))
+        for k in (1, 2)
+    )
+    symmetric, regional = caving_model(base), caving_model(replace(base, regions=boxes))
+    for k in (1, 2):
+        assert np.array_equal(symmetric.mesh.elements(f"undercut_{k}"), regional.mesh.elements(f"undercut_{k}"))
+    assert [t for t, _ in symmetric.stages] == [t for t, _ in regional.stages] == [0.05, 0.11]
+    assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(symmetric.stages, regional.stages, strict=True))
+    a = run_caving(tmp_path / "symmetric", base, threads=1, progress=False)
+    b = run_caving(tmp_path / "regions", replace(base, regions=boxes), threads=1, progress=False)
+    assert b["undercut_stages"] == 2
+    assert np.array_equal(a["simulation"].positions(), b["simulation"].positions())
+    for key in ("cracks_inserted", "fallen_area_m2", "metric_cave_back_m", "metric_yielded_area_m2"):
+        assert a[key] == b[key], key
+    for name in ("probes.csv", "table2.csv", "metrics.csv", "stages.csv", "caving.ckpt", "summary.txt"):
+        assert (tmp_path / "regions" / name).exists(), name
+    assert b["figures"]
+    with open(tmp_path / "regions" / "stages.csv", newline="") as f:
+        assert [float(r["undercut_width_m"]) for r in csv.DictReader(f)] == [20.0, 40.0]
+    # a checkpoint of a run whose case kept its stages as (time, x_from,
+    # x_to) resumes under the same stages as boxes
+    ckpt = tmp_path / "regions" / "caving.ckpt"
+    sim = fdem.Simulation.from_checkpoint(ckpt, regional)
+    sim.user_data["caving"]["case"]["regions"] = [[0.05, -10.0, 10.0], [0.11, -20.0, 20.0]]
+    sim.save_checkpoint(ckpt)
+    more = run_caving(tmp_path / "regions", replace(base, regions=boxes, until=0.15), progress=False, resume=True)
+    assert more["simulation"].time >= 0.15
+
+    # a polygon: a wedge reaching up into the rock, and a box to the right
+    wedge = ((-30.0, BOTTOM), (10.0, BOTTOM), (-10.0, BOTTOM + 25.0))
+    stages = (UndercutStage(0.05, polygon=wedge), UndercutStage(0.08, box=(20.0, BOTTOM, 60.0, top)))
+    case = replace(base, regions=stages)
+    mesh = caving_model(case).mesh
+    c = mesh.centroids()
+    inside = MplPath(np.array(wedge)).contains_points(c)
+    assert np.array_equal(mesh.elements("undercut_1"), np.flatnonzero(inside))
+    assert np.any(c[inside, 1] > top)  # rock too, not only the support
+    second = np.flatnonzero((c[:, 0] >= 20.0) & (c[:, 0] < 60.0) & (c[:, 1] < top) & ~inside)
+    assert np.array_equal(mesh.elements("undercut_2"), second)
+    # the width stages.csv and the figures show: the regions' x-extent
+    assert [case.undercut_width(k) for k in (0, 1, 2)] == [0.0, 40.0, 90.0]
+    assert [base.undercut_width(k) for k in (1, 2)] == [20.0, 40.0]
+
+    # the file round trip, with the (time, x_from, x_to) shorthand: a box
+    # over the support layer
+    path = tmp_path / "case.json"
+    replace(case, regions=(*stages, (0.1, -60.0, -40.0))).save(path)
+    loaded = CavingCase.load(path)
+    assert loaded.regions[2] == UndercutStage(0.1, box=(-60.0, BOTTOM, -40.0, top))
+    assert loaded == replace(case, regions=(*stages, UndercutStage(0.1, box=(-60.0, BOTTOM, -40.0, top))))
+
+    # bad values name their field
+    with pytest.raises(ValueError, match="time"):
+        UndercutStage(float("nan"), box=(0.0, 0.0, 1.0, 1.0))
+    for stage, field in (
+        ({"time": 0.1, "box": [10.0, BOTTOM, 0.0, top]}, r"regions\[1\]\.box"),
+        ({"time": 0.1, "polygon": [[0.0, BOTTOM], [1.0, BOTTOM]]}, r"regions\[1\]\.polygon"),
+        ({"time": -0.1, "box": [0.0, BOTTOM, 10.0, top]}, r"regions\[1\]\.time"),
+        ({"time": 0.1}, r"regions\[1\]"),
+        ({"time": 0.1, "box": [0.0, BOTTOM, 10.0, top], "polygon": wedge}, r"regions\[1\]"),
+        ({"time": 0.1, "radius": 3.0}, r"regions\[1\].*radius"),
+    ):
+        data = json.loads(case.to_json())
+        data["regions"][1] = stage
+        with pytest.raises(ValueError, match=f"bad.json: .*{field}"):
+            CavingCase.from_json(json.dumps(data), source="bad.json")
+    with pytest.raises(ValueError, match=r"UndercutStage\.box"):
+        UndercutStage(0.1, box=(0.0, BOTTOM, 0.0, top))
+    with pytest.raises(ValueError, match=r"CavingCase\.regions\[1\]"):
+        replace(base, regions=(boxes[0], "everything"))
+    with pytest.raises(ValueError, match=r"regions\[1\].*removes no element"):
+        caving_model(replace(base, regions=(boxes[0], boxes[0])))

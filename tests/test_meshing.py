@@ -4,6 +4,7 @@ mesher against Delaunay refinement, on the caving case's joints."""
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import replace
 from pathlib import Path
 
@@ -138,3 +139,34 @@ def test_joint_traces_perturbed_in_length_and_angle_by_seed():
     assert longest.max() < 9.0
     with pytest.raises(ValueError, match="angle_jitter"):
         fdem.JointSet(0.0, 1.0, 0.0, 1.0, angle_jitter=60.0)
+
+
+def test_jittered_inclined_joints_mesh_within_the_snap_back_limit():
+    """Issue 35 (2): two inclined joint sets perturbed in position, length
+    and angle, on the quick case's uniform 4 m mesh, over several seeds:
+    no element is wider (its longest edge, the crack band the kernel checks
+    with Oliver's rule) than Table 1's snap-back limit 2 E' Gf / ft² =
+    2 × 60 GPa / (1 − 0.25²) × 70 J/m² / (1 MPa)² = 8.96 m, and the kernel
+    builds the model. The smoothing used to stretch the triangles beside
+    trace ends just past a crossing to 17 m (docs/meshing.md)."""
+    limit = 2 * 60e9 / (1 - 0.25**2) * 70.0 / 1e6**2
+    assert fdem.caving.ROCK.snap_back_size == pytest.approx(limit, rel=1e-14)
+    sets = (
+        fdem.JointSet(60.0, 60.0, 30.0, 8.0, jitter=0.5, length_jitter=0.1, angle_jitter=2.0, name="a"),
+        fdem.JointSet(150.0, 30.0, 15.0, 12.0, jitter=0.5, length_jitter=0.1, angle_jitter=2.0, name="b"),
+    )
+    widest = []
+    for seed in range(6):
+        case = replace(CavingCase.quick(), joints=tuple(replace(j, seed=seed + 100 * k) for k, j in enumerate(sets)))
+        assert case.uniform_mesh
+        with warnings.catch_warnings():
+            # a trace whose ends snap onto one point is dropped quietly
+            warnings.simplefilter("error")
+            model = caving_model(case)
+        p, t = model.mesh.points, model.mesh.triangles
+        longest = np.max([np.hypot(*(p[t[:, (k + 1) % 3]] - p[t[:, k]]).T) for k in range(3)], axis=0)
+        widest.append(longest.max())
+        fdem.Simulation(model, threads=1)
+    # the lattice's 4 m edges, constraint pieces up to 1.5 × 4 m and the
+    # refinement's triangles along them: about twice the size at most
+    assert max(widest) < limit, widest

@@ -35,6 +35,7 @@ import json
 import math
 import os
 import time as _time
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -63,7 +64,15 @@ from .model import Model
 from .plot import plot_field, pyplot
 from .simulation import Simulation
 
-__all__ = ["CavingCase", "caving_model", "run_caving", "probe_stress", "PAPER_PROBES", "paper_joint_sets"]
+__all__ = [
+    "CavingCase",
+    "UndercutStage",
+    "caving_model",
+    "run_caving",
+    "probe_stress",
+    "PAPER_PROBES",
+    "paper_joint_sets",
+]
 
 # Table 2 of the paper: node, x (m), y (m) at 3.5 s, in the paper's frame
 # (fdem.caving_stress has its stresses and the frames)
@@ -83,6 +92,154 @@ UNIT_WEIGHT = 30.41e3
 ROCK = MohrCoulombRankine(E=60e9, nu=0.25, rho=3100.0, c=8e6, phi=55.0, psi=9.0, ft=1e6, Gf=70.0)
 JOINTS = Interface(friction=33.0, cohesion=50e3, damping=0.5)
 CRACKS = Interface(friction=33.0, damping=0.5)
+
+
+@dataclass(frozen=True)
+class UndercutStage:
+    """One stage of an undercut schedule (:attr:`CavingCase.regions`): at
+    ``time`` the elements still standing whose centroids lie in a region
+    of the model are removed (:meth:`Model.excavate`).
+
+    Parameters
+    ----------
+    time : float
+        When the stage removes its elements (s of simulated time after the
+        equilibrium stage), ``>= 0``.
+    box : (xmin, ymin, xmax, ymax), optional
+        A rectangle in model coordinates (m; the block spans x from −100
+        to 100 m and y from −534 to −434 m), half-open: centroids with
+        ``xmin <= x < xmax`` and ``ymin <= y < ymax``.
+    polygon : sequence of (x, y), optional
+        At least three corners (m), in either orientation; a centroid is
+        inside by the even-odd rule. Give exactly one of ``box`` and
+        ``polygon``.
+
+    Any element can be in a region, rock as well as support: a box over
+    the support layer, ``(x0, BOTTOM, x1, BOTTOM + support)``, is the
+    paper's kind of undercut, and the symmetric schedule is the boxes
+    ``(−k step, BOTTOM, k step, BOTTOM + support)`` at ``start + (k − 1)
+    interval``.
+
+    Raises
+    ------
+    ValueError
+        A bad value, naming the field (``UndercutStage.box``; within a
+        case, ``CavingCase.regions[i].box``).
+
+    Examples
+    --------
+    >>> UndercutStage(0.05, box=(-10.0, BOTTOM, 10.0, BOTTOM + 3.0))
+    UndercutStage(time=0.05, box=(-10.0, -534.0, 10.0, -531.0), polygon=None)
+    """
+
+    time: float
+    box: tuple[float, float, float, float] | None = None
+    polygon: tuple[tuple[float, float], ...] | None = None
+
+    def __post_init__(self) -> None:
+        self._check("UndercutStage")
+
+    def _check(self, where: str) -> None:
+        """Validates and normalises the fields (tuples of floats), naming
+        each bad one as ``where.field``."""
+        t = _finite(f"{where}.time", self.time)
+        if t < 0:
+            raise ValueError(f"{where}.time = {t} must be >= 0 (s)")
+        object.__setattr__(self, "time", t)
+        if (self.box is None) == (self.polygon is None):
+            raise ValueError(f"{where}: give exactly one of box (xmin, ymin, xmax, ymax) and polygon [(x, y), ...]")
+        if self.box is not None:
+            box = _floats(f"{where}.box", self.box)
+            if len(box) != 4 or not (box[0] < box[2] and box[1] < box[3]):
+                raise ValueError(
+                    f"{where}.box = {self.box!r} must be (xmin, ymin, xmax, ymax) with xmin < xmax and ymin < ymax (m)"
+                )
+            object.__setattr__(self, "box", box)
+        else:
+            corners: Any = self.polygon
+            if isinstance(corners, (str, bytes)) or not hasattr(corners, "__len__") or len(corners) < 3:
+                raise ValueError(f"{where}.polygon = {corners!r} must be a sequence of at least three (x, y) corners")
+            poly = tuple(_floats(f"{where}.polygon[{i}]", c) for i, c in enumerate(corners))
+            if any(len(c) != 2 for c in poly):
+                raise ValueError(f"{where}.polygon = {corners!r}: every corner is an (x, y) pair")
+            xy = np.array(poly)
+            area = 0.5 * abs(np.dot(xy[:, 0], np.roll(xy[:, 1], -1)) - np.dot(xy[:, 1], np.roll(xy[:, 0], -1)))
+            if not area > 0:
+                raise ValueError(f"{where}.polygon = {corners!r} encloses no area")
+            object.__setattr__(self, "polygon", poly)
+
+    def contains(self, points: NDArray[np.float64]) -> NDArray[np.bool_]:
+        """Which of ``points`` (n, 2) lie in the stage's region (the box
+        half-open, the polygon by the even-odd rule)."""
+        x, y = points[:, 0], points[:, 1]
+        if self.box is not None:
+            x0, y0, x1, y1 = self.box
+            return (x >= x0) & (x < x1) & (y >= y0) & (y < y1)
+        corners = np.array(self.polygon)
+        inside = np.zeros(len(points), dtype=bool)
+        for (ax, ay), (bx, by) in zip(corners, np.roll(corners, -1, axis=0), strict=True):
+            # edges that straddle the point's height, crossed to its right
+            straddle = (ay > y) != (by > y)
+            if ay != by:
+                cross = ax + (y - ay) * (bx - ax) / (by - ay)
+                inside ^= straddle & (x < cross)
+        return inside
+
+    def x_range(self) -> tuple[float, float]:
+        """The least and largest x of the region (m)."""
+        if self.box is not None:
+            return self.box[0], self.box[2]
+        xs = [c[0] for c in self.polygon or ()]
+        return min(xs), max(xs)
+
+
+def _finite(name: str, value: Any) -> float:
+    """``value`` as a finite float, or a ValueError naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name} = {value!r} must be a number")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ValueError(f"{name} = {value!r} must be finite")
+    return v
+
+
+def _floats(name: str, value: Any) -> tuple[float, ...]:
+    """A sequence of finite numbers as a tuple of floats, or a ValueError
+    naming ``name``."""
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+        raise ValueError(f"{name} = {value!r} must be a sequence of numbers")
+    return tuple(_finite(name, v) for v in value)
+
+
+def _stage(where: str, value: Any, support: float) -> UndercutStage:
+    """A stage of :attr:`CavingCase.regions` from an :class:`UndercutStage`,
+    a mapping of its fields (as JSON has it) or the shorthand ``(time,
+    x_from, x_to)``: the box over the support layer between those x."""
+    if isinstance(value, UndercutStage):
+        stage = value
+    elif isinstance(value, Mapping):
+        unknown = set(value) - {"time", "box", "polygon"}
+        if unknown:
+            raise ValueError(f"{where}: unknown field(s) {sorted(unknown)} (an undercut stage has time, box, polygon)")
+        if "time" not in value:
+            raise ValueError(f"{where}: the stage has no time")
+        # built without its own check, so that a bad value is named here
+        stage = object.__new__(UndercutStage)
+        for name in ("time", "box", "polygon"):
+            object.__setattr__(stage, name, value.get(name))
+    elif isinstance(value, (tuple, list)) and len(value) == 3:
+        t, x0, x1 = (_finite(f"{where}", v) for v in value)
+        if not x0 < x1:
+            raise ValueError(f"{where} = {tuple(value)} must be (time >= 0, x_from, x_to) with x_from < x_to")
+        stage = object.__new__(UndercutStage)
+        for name, v in (("time", t), ("box", (x0, BOTTOM, x1, BOTTOM + support)), ("polygon", None)):
+            object.__setattr__(stage, name, v)
+    else:
+        raise ValueError(
+            f"{where} = {value!r} must be a fdem.caving.UndercutStage, its fields as a mapping, or (time, x_from, x_to)"
+        )
+    stage._check(where)
+    return stage
 
 
 @dataclass(frozen=True)
@@ -185,12 +342,15 @@ class CavingCase:
     and ``crack_law`` (default: 33°, 50 kPa and 33°, both with ξ = 0.5)
     and ``top_pressure`` (Pa, 15.2 MPa) replace the paper's materials and
     load; gravity stays 30.41 kN/m³ over 3100 kg/m³. ``regions`` replaces
-    the schedule by any sequence of stages ``(time s, x_from m, x_to m)``:
-    each removes the support still standing with centroids in
-    ``[x_from, x_to)`` at its time (``undercut`` still names the undercut's
-    full width, whose edges the abutment and metrics read). The case round-trips through JSON
-    (:meth:`to_json`, :meth:`from_json`, :meth:`save`, :meth:`load`),
-    which names the field of any bad value."""
+    the schedule by any sequence of stages (:class:`UndercutStage`: a time
+    and a box or polygon in model coordinates), each removing at its time
+    the elements still standing, support or rock, whose centroids lie in
+    its region; ``(time, x_from, x_to)`` is short for the box over the
+    support layer between those x (``undercut`` still names the
+    undercut's full width, whose edges the abutment and metrics read;
+    :meth:`undercut_width` is the width the stages have opened). The case
+    round-trips through JSON (:meth:`to_json`, :meth:`from_json`,
+    :meth:`save`, :meth:`load`), which names the field of any bad value."""
 
     size: float = 1.0
     joint_scale: float = 1.0
@@ -218,7 +378,7 @@ class CavingCase:
     joint_law: Interface | None = None
     crack_law: Interface | None = None
     top_pressure: float = TOP_PRESSURE
-    regions: tuple[tuple[float, float, float], ...] | None = None
+    regions: tuple[UndercutStage, ...] | None = None
 
     def __post_init__(self) -> None:
         if self.probe_frame not in FRAMES:
@@ -234,12 +394,11 @@ class CavingCase:
                     raise ValueError(f"CavingCase.joints[{i}] must be a fdem.JointSet, got {type(j).__name__}")
             object.__setattr__(self, "joints", sets)
         if self.regions is not None:
-            regions = tuple(tuple(float(v) for v in r) for r in self.regions)
-            for i, r in enumerate(regions):
-                if len(r) != 3 or not all(math.isfinite(v) for v in r) or r[0] < 0 or not r[1] < r[2]:
-                    raise ValueError(
-                        f"CavingCase.regions[{i}] = {r} must be (time >= 0, x_from, x_to) with x_from < x_to"
-                    )
+            if isinstance(self.regions, (str, bytes, Mapping)) or not hasattr(self.regions, "__iter__"):
+                raise ValueError(f"CavingCase.regions = {self.regions!r} must be a sequence of undercut stages")
+            regions = tuple(_stage(f"CavingCase.regions[{i}]", r, self.support) for i, r in enumerate(self.regions))
+            if not regions:
+                raise ValueError("CavingCase.regions is empty: give at least one stage, or None for the schedule")
             object.__setattr__(self, "regions", regions)
         if self.rock is not None and not isinstance(self.rock, MohrCoulombRankine):
             raise ValueError(f"CavingCase.rock must be a fdem.MohrCoulombRankine, got {type(self.rock).__name__}")
@@ -299,6 +458,19 @@ class CavingCase:
         """Reads a case written by :meth:`save` (or by hand)."""
         return cls.from_json(Path(path).read_text(), source=os.fspath(path))
 
+    def undercut_width(self, stages: int) -> float:
+        """The undercut's width (m) after ``stages`` stages: ``2 step
+        stages`` for the symmetric and one-sided schedules; with
+        ``regions``, the x-extent of the first ``stages`` regions, clipped
+        to the block (what ``stages.csv``, ``metrics.png`` and the Fig. 4
+        titles show)."""
+        if self.regions is None or stages <= 0:
+            return 2 * self.step * max(stages, 0)
+        spans = [r.x_range() for r in self.regions[:stages]]
+        lo = max(min(a for a, _ in spans), -0.5 * WIDTH)
+        hi = min(max(b for _, b in spans), 0.5 * WIDTH)
+        return max(hi - lo, 0.0)
+
     def figure_times(self) -> list[float]:
         """The times (s) of the Fig. 4-like pictures: the start, the third
         undercut stage, half the run and its end, each once (rounded to the
@@ -344,9 +516,11 @@ def _case_value(source: str, key: str, value: Any, default: Any) -> Any:
     if value is None and key in ("mass_scaling", "renumber", "k0", "rock", "joint_law", "crack_law", "regions"):
         return None
     if key == "regions":
-        if not isinstance(value, list) or not all(isinstance(r, list) for r in value):
-            raise ValueError(f"{source}: regions must be a list of [time, x_from, x_to], got {value!r}")
-        return tuple(tuple(r) for r in value)
+        if not isinstance(value, list):
+            raise ValueError(f"{source}: regions must be a list of stages ({{time, box or polygon}}), got {value!r}")
+        # each stage is checked by the case (with its support layer's
+        # thickness, for the (time, x_from, x_to) shorthand)
+        return tuple(value)
     if key in ("rock", "joint_law", "crack_law"):
         kind = MohrCoulombRankine if key == "rock" else Interface
         if not isinstance(value, dict):
@@ -397,18 +571,26 @@ def caving_model(case: CavingCase | None = None) -> Model:
     done = np.zeros(mesh.n_elements, dtype=bool)
     for k in range(1, stages + 1):
         if case.regions is not None:
-            at, x_from, x_to = case.regions[k - 1]
-            reach = (c[support, 0] >= x_from) & (c[support, 0] < x_to)
-        elif case.schedule == "symmetric":
-            at = case.start + (k - 1) * case.interval
-            reach = np.abs(c[support, 0]) < k * case.step
+            # any element in the stage's region, support or rock
+            at = case.regions[k - 1].time
+            ids = np.flatnonzero(case.regions[k - 1].contains(c) & ~done)
+            if len(ids) == 0:
+                raise ValueError(
+                    f"CavingCase.regions[{k - 1}]: undercut stage {k} removes no element (no centroid left standing "
+                    "in its region; the block spans x from -100 to 100 m and y from -534 to -434 m)"
+                )
         else:
             at = case.start + (k - 1) * case.interval
-            left = -0.5 * case.undercut
-            reach = (c[support, 0] > left) & (c[support, 0] < left + 2 * k * case.step)
-        ids = support[reach & ~done[support]]
-        if len(ids) == 0:
-            raise ValueError(f"CavingCase: undercut stage {k} removes no support element (nothing left in its reach)")
+            if case.schedule == "symmetric":
+                reach = np.abs(c[support, 0]) < k * case.step
+            else:
+                left = -0.5 * case.undercut
+                reach = (c[support, 0] > left) & (c[support, 0] < left + 2 * k * case.step)
+            ids = support[reach & ~done[support]]
+            if len(ids) == 0:
+                raise ValueError(
+                    f"CavingCase: undercut stage {k} removes no support element (nothing left in its reach)"
+                )
         done[ids] = True
         element_sets[f"undercut_{k}"] = ids
         times.append(at)
@@ -664,7 +846,7 @@ def run_caving(
                         "principal_stress_1",
                         path,
                         title=f"First principal stress σ1, t = {sim.time:.2f} s"
-                        f" (undercut {sim.stages_done * 20:.0f} m)",
+                        f" (undercut {case.undercut_width(sim.stages_done):.0f} m)",
                         limits=(-40.0, 2.0),
                     )
                     figures.append(path.name)
@@ -848,7 +1030,12 @@ def _resumed(ckpt: Path, model: Model, case: CavingCase, threads: int | None) ->
     # reproduces the runs made before it: its default, or what the default
     # was then (the uniform mesh became the default after the field came)
     # as the checkpoint keeps it (JSON: tuples become lists)
-    saved, mine = book["case"], json.loads(json.dumps(asdict(case)))
+    saved, mine = dict(book["case"]), json.loads(json.dumps(asdict(case)))
+    if saved.get("regions"):
+        # runs from before the stages had regions kept (time, x_from, x_to)
+        thick = saved.get("support", CavingCase.support)
+        stages = [asdict(_stage(f"regions[{i}]", r, thick)) for i, r in enumerate(saved["regions"])]
+        saved["regions"] = json.loads(json.dumps(stages))
     default = {**asdict(CavingCase()), **_BEFORE_FIELD}
     differ = [
         f"{k} = {mine[k]!r} (the run: {saved.get(k, default[k])!r})"
@@ -909,7 +1096,7 @@ def _write_metrics(out: Path, sim: Simulation, rows: list[list[float]], case: Ca
         w.writerow(["stage", "undercut_width_m", "time_s", *_METRIC_KEYS])
         for k in sorted({int(r[1]) for r in rows if r[1] > 0}):
             first = next(r for r in rows if int(r[1]) == k)
-            w.writerow([k, 2 * case.step * k, first[0], *first[2:]])
+            w.writerow([k, case.undercut_width(k), first[0], *first[2:]])
     x0, x = sim.reference_positions(), sim.positions()
     top = np.flatnonzero(np.abs(x0[:, 1] - TOP) < 1e-6 * abs(TOP))
     edges = np.arange(-0.5 * WIDTH, 0.5 * WIDTH + 1e-9, 5.0)
@@ -927,7 +1114,8 @@ def _write_metrics(out: Path, sim: Simulation, rows: list[list[float]], case: Ca
     ax[0].set_ylabel("height (m)")
     ax[0].grid(alpha=0.3)
     twin = ax[0].twinx()
-    twin.plot(data[:, 0], data[:, 1] * 20.0, "k:", lw=1, label="undercut width")
+    widths = [case.undercut_width(int(k)) for k in data[:, 1]]
+    twin.plot(data[:, 0], widths, "k:", lw=1, label="undercut width")
     twin.set_ylabel("undercut width (m)")
     ax[0].set_title("Cave back over the midline (solid) and undercut (dotted)")
     ax[1].plot(data[:, 0], data[:, 6] / 1e3, label="yielded area")

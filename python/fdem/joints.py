@@ -195,6 +195,8 @@ def _snap(
         for end in (0, 1):
             p, q = out[i, end], out[i, 1 - end]
             d = p - q
+            if not np.any(d):
+                continue  # both ends snapped onto one point: nothing left to move
             d = d / np.linalg.norm(d)
             best = None
             # the domain sides
@@ -234,6 +236,9 @@ def _planarize(
     for axis, value in ((0, x0), (0, x1), (1, y0), (1, y1)):
         near = np.abs(t[:, :, axis] - value) < tol
         t[:, :, axis][near] = value
+    # a trace whose ends were snapped onto one point is no trace
+    keep = np.any(t[:, 0] != t[:, 1], axis=1)
+    t, labels = t[keep], labels[keep]
     n = len(t)
     cuts: list[list[tuple[float, NDArray[Any]]]] = [[] for _ in range(n)]
     a, b = t[:, 0], t[:, 1]

@@ -432,10 +432,27 @@ pub fn step_length(a: Point, b: Point, c: Point) -> f64 {
 /// raises the smallest [`step_length`] of its triangles; then the nodes of
 /// the worst triangles (below `POLISH` of the median) are moved by a
 /// pattern search (eight directions, halving steps) that raises it further.
-/// Connectivity is kept; no triangle inverts and the mesh's smallest step
-/// length never drops. Deterministic.
+/// Connectivity is kept; no triangle inverts, the mesh's smallest step
+/// length never drops and no edge becomes longer than the longest edge of
+/// the mesh before smoothing. Deterministic.
+///
+/// Why the bound on edges: a triangle on a constraint piece much shorter
+/// than the rest (a trace ending just past another) has a step length
+/// bounded by that piece, which grows a little as long as its free corner
+/// moves away; the pattern search then walked that corner across the mesh
+/// and stretched its other triangles to three times their size (16.5 m
+/// edges in a 4 m mesh), beyond a crack band's snap-back limit, for a gain
+/// in the worst step length of under 1% (docs/meshing.md).
 pub fn smooth(points: &mut [Point], triangles: &[[u32; 3]], fixed: &[bool], sweeps: usize) {
     let incident = crate::node_elements(points.len(), triangles);
+    let dist2 = |p: Point, q: Point| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
+    let longest2 = triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .map(|(a, b)| dist2(points[a as usize], points[b as usize]))
+        .fold(0.0, f64::max);
+    // the smallest step length of `v`'s triangles with `v` at `p`; minus
+    // infinity (never taken) where an edge of them would outgrow the bound
     let worst = |points: &[Point], v: usize, p: Point| {
         incident
             .row(v)
@@ -444,6 +461,9 @@ pub fn smooth(points: &mut [Point], triangles: &[[u32; 3]], fixed: &[bool], swee
                 let (e, k) = ((ek / 3) as usize, (ek % 3) as usize);
                 let t = triangles[e];
                 let q = |i: usize| if i == k { p } else { points[t[i] as usize] };
+                if (0..3).any(|i| i != k && dist2(p, q(i)) > longest2) {
+                    return f64::NEG_INFINITY;
+                }
                 step_length(q(0), q(1), q(2))
             })
             .fold(f64::INFINITY, f64::min)
@@ -737,5 +757,39 @@ mod tests {
                 assert_eq!(*p, before.points[k]);
             }
         }
+    }
+
+    fn longest_edge(g: &Generated) -> f64 {
+        g.triangles
+            .iter()
+            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+            .map(|(a, b)| {
+                let (p, q) = (g.points[a as usize], g.points[b as usize]);
+                (q[0] - p[0]).hypot(q[1] - p[1])
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn a_short_constraint_piece_does_not_stretch_the_uniform_mesh() {
+        // a trace ending 0.43 m past the end of another (a T almost at a
+        // corner, as perturbed joint sets make them), in a 4 m mesh: the
+        // constraints are divided into pieces of at most 1.5 size and the
+        // refinement makes triangles of at most 1.3 equilateral areas, so
+        // no edge needs to be longer than 1.5 size; chasing the step length
+        // of the triangle on the stub, the smoothing stretched edges to
+        // 16.5 m before it kept them within the longest edge it was given
+        let outline = [[0.0, 0.0], [40.0, 0.0], [40.0, 24.0], [0.0, 24.0]];
+        let size = 4.0;
+        let segments = [[[20.0, 11.57], [20.0, 12.0]], [[20.0, 12.0], [20.4, 24.0]], [[4.0, 12.1], [20.0, 12.0]]];
+        let g = triangulate_uniform(&outline, &segments, size, 25.0, 100_000).unwrap();
+        assert_conforms(&g, &segments);
+        let longest = longest_edge(&g);
+        assert!(longest <= 1.5 * size, "longest edge {longest} m");
+        // the worst triangle is the stub's: its step length is bounded by
+        // the 0.43 m piece (a/√2 for a short edge a under a tall apex),
+        // and smoothing brings it within 1% of that
+        let w = worst(&g);
+        assert!(w > 0.98 * 0.43 / 2f64.sqrt() && w < 0.43 / 2f64.sqrt(), "worst step length {w}");
     }
 }
