@@ -133,7 +133,7 @@ impl Envelope {
 }
 
 /// What one evaluation of a bond gives.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BondResponse {
     /// Force on node `b` (N per unit thickness); `a` gets its negative.
     pub force: Vec2,

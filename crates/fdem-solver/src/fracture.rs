@@ -64,6 +64,9 @@ pub(crate) struct FractureModel {
     factor_seen: Vec<f64>,
     #[serde(skip)]
     candidates: Vec<u32>,
+    /// Scratch: each bond's response in the last step ([`Simulation::bond_forces`]).
+    #[serde(skip)]
+    bond_responses: Vec<fdem_contact::BondResponse>,
 }
 
 impl FractureModel {
@@ -84,6 +87,7 @@ impl FractureModel {
             areas: Vec::new(),
             factor_seen: Vec::new(),
             candidates: Vec::new(),
+            bond_responses: Vec::new(),
         }
     }
 }
@@ -563,7 +567,10 @@ impl Simulation {
 
     /// Adds the forces of the intact bonds at `xⁿ` to the contact forces of
     /// their (boundary) nodes, books their dissipation as fracture energy,
-    /// and drops the bonds that broke.
+    /// and drops the bonds that broke. The bonds are updated in parallel
+    /// (each reads only its two nodes); their forces and energies are then
+    /// added up in bond order, so the sums do not depend on the thread
+    /// count.
     pub(crate) fn bond_forces(&mut self) {
         let Some(fr) = &mut self.fracture else { return };
         if fr.bonds.is_empty() {
@@ -571,16 +578,29 @@ impl Simulation {
             return;
         }
         let (x, index_of) = (&self.nodes.x, &self.surface.index_of);
+        // grows only when the bonds do (at insertions)
+        let responses = &mut fr.bond_responses;
+        responses.resize(fr.bonds.len(), fdem_contact::BondResponse::default());
+        fr.bonds.par_iter_mut().zip(responses.par_iter_mut()).with_min_len(crate::CHUNK).for_each(|(bond, r)| {
+            let [a, b] = bond.nodes;
+            *r = bond.update(x[a as usize], x[b as usize]);
+        });
         let (mut dissipated, mut elastic) = (0.0, 0.0);
         let force = &mut self.contact_force;
-        fr.bonds.retain_mut(|bond| {
-            let [a, b] = bond.nodes;
-            let r = bond.update(x[a as usize], x[b as usize]);
+        let mut broken = false;
+        for (bond, r) in fr.bonds.iter().zip(responses.iter()) {
             dissipated += r.dissipated;
             elastic += r.elastic;
             add_bond_force(force, index_of, bond.nodes, r.force);
-            !r.broken
-        });
+            broken |= r.broken;
+        }
+        if broken {
+            let mut k = 0;
+            fr.bonds.retain(|_| {
+                k += 1;
+                !responses[k - 1].broken
+            });
+        }
         self.energies.fracture += dissipated;
         self.energies.cohesive_elastic = elastic;
     }
