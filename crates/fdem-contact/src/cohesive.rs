@@ -146,7 +146,8 @@ pub struct BondResponse {
 }
 
 impl Bond {
-    /// Opening at which softening begins, `δ₀ = t₀ / k` (m).
+    /// Opening at which softening begins in pure opening, `δ₀ = t₀ / k`
+    /// (m) (for the isotropic law, in any direction).
     #[inline]
     pub fn elastic_limit(&self) -> f64 {
         self.strength / self.stiffness
@@ -165,7 +166,8 @@ impl Bond {
         }
     }
 
-    /// Secant stiffness `k (1 − D)` (Pa/m) after a largest opening `δ_max`.
+    /// Secant stiffness `k (1 − D)` (Pa/m) of the isotropic law (and of
+    /// the mixed law in pure opening) after a largest opening `δ_max`.
     #[inline]
     pub fn secant(&self, max_opening: f64) -> f64 {
         if max_opening <= self.elastic_limit() {
@@ -175,9 +177,10 @@ impl Bond {
         }
     }
 
-    /// Energy (J/m² of crack) dissipated once the largest opening is
-    /// `δ_max`: the area under the envelope up to `δ_max` less the elastic
-    /// energy still held at `δ_max`. `½ t₀ δ_c` at `δ_c`.
+    /// Energy (J/m² of crack) the isotropic law (and the mixed law in pure
+    /// opening) has dissipated once the largest opening is `δ_max`: the
+    /// area under the envelope up to `δ_max` less the elastic energy still
+    /// held at `δ_max`. `½ t₀ δ_c` at `δ_c`.
     pub fn dissipation(&self, max_opening: f64) -> f64 {
         let d0 = self.elastic_limit();
         if max_opening <= d0 {
@@ -190,7 +193,9 @@ impl Bond {
         area - 0.5 * self.envelope(dm) * dm
     }
 
-    /// Fracture energy the bond can dissipate in all, `½ t₀ δ_c` (J/m²).
+    /// Fracture energy the bond dissipates in pure opening, `½ t₀ δ_c`
+    /// (J/m²): all it can for the isotropic law; the mixed law's mode-I
+    /// energy `G_I` (pure slip: [`MixedMode::shear_energy`]).
     pub fn fracture_energy(&self) -> f64 {
         0.5 * self.strength * self.final_opening
     }
