@@ -210,11 +210,17 @@ impl Bond {
                 self.max_opening = delta;
             }
             let (dn, ds, env) = self.mode_of(&m, d);
-            let before = m.damage;
-            m.damage = m.damage.max(env.damage((dn.max(0.0) * dn.max(0.0) + ds * ds).sqrt()));
-            let dissipated =
-                (env.dissipation(self.stiffness, m.damage) - env.dissipation(self.stiffness, before)) * self.length;
-            self.mode = Some(m);
+            let now = env.damage((dn.max(0.0) * dn.max(0.0) + ds * ds).sqrt());
+            // most bonds most steps hold or unload: no damage grows and
+            // nothing is dissipated (what the difference below gives then)
+            let mut dissipated = 0.0;
+            if now > m.damage {
+                let before = m.damage;
+                m.damage = now;
+                dissipated =
+                    (env.dissipation(self.stiffness, now) - env.dissipation(self.stiffness, before)) * self.length;
+                self.mode = Some(m);
+            }
             let (force, elastic) = self.mixed_force(&m, dn, ds);
             return BondResponse { force, dissipated, elastic, broken: m.damage >= 1.0 };
         }
