@@ -336,6 +336,17 @@ impl BroadPhase {
             }
         }
         self.boxes = boxes;
+        // the fresh boxes by their left side, so that a node tests only
+        // those whose left side lies within the widest box's width to its
+        // left (every node against every fresh box took 6% of a
+        // fragmenting impact's run); the node's list is sorted after, so
+        // the order they are found in does not matter
+        let mut by_left: Vec<u32> = (0..fresh.len() as u32).collect();
+        by_left.sort_unstable_by(|&a, &b| {
+            fresh_boxes[a as usize].mins.x.total_cmp(&fresh_boxes[b as usize].mins.x).then(a.cmp(&b))
+        });
+        let lefts: Vec<f64> = by_left.iter().map(|&i| fresh_boxes[i as usize].mins.x).collect();
+        let widest = fresh_boxes.iter().map(|b| b.maxs.x - b.mins.x).fold(0.0_f64, f64::max);
         self.facet_of_key.clear();
         self.facet_of_key.resize(max_key, crate::NONE);
         for (i, f) in new.facets.iter().enumerate() {
@@ -349,7 +360,7 @@ impl BroadPhase {
         self.chunk_counts.resize_with(n_chunks, Vec::new);
         let mut built_at = vec![[0.0; 2]; new.nodes.len()];
         let (bvh, facet_of_key, old_cand, old_at) = (&self.bvh, &self.facet_of_key, &self.candidates, &self.built_at);
-        let (fresh, fresh_boxes, old_to_new) = (&fresh, &fresh_boxes, &old_to_new);
+        let (fresh, fresh_boxes, old_to_new, by_left, lefts) = (&fresh, &fresh_boxes, &old_to_new, &by_left, &lefts);
         new.nodes
             .par_chunks(CHUNK)
             .zip(built_at.par_chunks_mut(CHUNK))
@@ -383,7 +394,10 @@ impl BroadPhase {
                                 .map(|&j| old_to_new[j as usize])
                                 .filter(|&k| k != crate::NONE),
                         );
-                        for (&k, bx) in fresh.iter().zip(fresh_boxes) {
+                        let from = lefts.partition_point(|&l| l < p[0] - widest);
+                        let to = lefts.partition_point(|&l| l <= p[0]);
+                        for &i in &by_left[from..to.max(from)] {
+                            let (k, bx) = (fresh[i as usize], &fresh_boxes[i as usize]);
                             let inside =
                                 bx.mins.x <= p[0] && p[0] <= bx.maxs.x && bx.mins.y <= p[1] && p[1] <= bx.maxs.y;
                             if inside && keep(k) {
