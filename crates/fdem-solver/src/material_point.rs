@@ -3,10 +3,10 @@
 
 use fdem_element::kinematics::{inverse_2x2, mul_2x2, polar_rotation};
 use fdem_element::tensor::{rotate, rotate_back};
-use fdem_material::{Elastic, Geometry, MohrCoulombRankine, PlasticState};
+use fdem_material::{Elastic, Geometry, PlasticState};
 
 use crate::error::SetupError;
-use crate::model::{LawSpec, MaterialSpec};
+use crate::model::MaterialSpec;
 
 /// The path a material point is driven along.
 #[derive(Clone, Debug, PartialEq)]
@@ -49,29 +49,7 @@ pub fn material_point(
 ) -> Result<History, SetupError> {
     let bad = |index, error| SetupError::Material { index, error };
     let elastic = Elastic::new(material.young, material.poisson).map_err(|e| bad(0, e))?;
-    let law = match material.law {
-        LawSpec::Elastic => None,
-        LawSpec::MohrCoulombRankine {
-            cohesion,
-            friction,
-            dilation,
-            tensile_strength,
-            fracture_energy,
-            crack_band,
-            ..
-        } => Some(
-            MohrCoulombRankine::new(
-                elastic,
-                cohesion,
-                friction,
-                dilation,
-                tensile_strength,
-                fracture_energy,
-                crack_band,
-            )
-            .map_err(|e| bad(0, e))?,
-        ),
-    };
+    let law = material.law.plastic(elastic).map_err(|e| bad(0, e))?;
     if !(crack_band > 0.0 && crack_band.is_finite()) {
         return Err(SetupError::Invalid(format!("element_size = {crack_band} must be positive")));
     }
@@ -163,6 +141,7 @@ pub fn material_point(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::LawSpec;
     use fdem_material::CrackBand;
 
     fn rock() -> MaterialSpec {

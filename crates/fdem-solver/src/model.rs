@@ -48,6 +48,37 @@ pub enum LawSpec {
     },
 }
 
+impl LawSpec {
+    /// The plastic law this spec describes with the elastic constants
+    /// `elastic`, checked (`None` for linear elasticity).
+    pub fn plastic(
+        &self,
+        elastic: fdem_material::Elastic,
+    ) -> Result<Option<fdem_material::MohrCoulombRankine>, fdem_material::ParameterError> {
+        match *self {
+            LawSpec::Elastic => Ok(None),
+            LawSpec::MohrCoulombRankine {
+                cohesion,
+                friction,
+                dilation,
+                tensile_strength,
+                fracture_energy,
+                crack_band,
+                ..
+            } => fdem_material::MohrCoulombRankine::new(
+                elastic,
+                cohesion,
+                friction,
+                dilation,
+                tensile_strength,
+                fracture_energy,
+                crack_band,
+            )
+            .map(Some),
+        }
+    }
+}
+
 /// Run settings that may change between stages.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Settings {

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use fdem_element::kinematics::{reference_inverse, signed_area};
 use fdem_element::lumped_mass;
-use fdem_material::{Elastic, MohrCoulombRankine, PlasticState};
+use fdem_material::{Elastic, PlasticState};
 use fdem_mesh::{node_elements, validate};
 
 use crate::contact::ContactModel;
@@ -38,29 +38,7 @@ impl Simulation {
         let mut materials = Vec::with_capacity(spec.materials.len());
         for (index, ms) in spec.materials.iter().enumerate() {
             let elastic = Elastic::new(ms.young, ms.poisson).map_err(|error| SetupError::Material { index, error })?;
-            let plastic = match ms.law {
-                LawSpec::Elastic => None,
-                LawSpec::MohrCoulombRankine {
-                    cohesion,
-                    friction,
-                    dilation,
-                    tensile_strength,
-                    fracture_energy,
-                    crack_band,
-                    ..
-                } => Some(
-                    MohrCoulombRankine::new(
-                        elastic,
-                        cohesion,
-                        friction,
-                        dilation,
-                        tensile_strength,
-                        fracture_energy,
-                        crack_band,
-                    )
-                    .map_err(|error| SetupError::Material { index, error })?,
-                ),
-            };
+            let plastic = ms.law.plastic(elastic).map_err(|error| SetupError::Material { index, error })?;
             if !(ms.density > 0.0 && ms.density.is_finite()) {
                 let error = fdem_material::ParameterError {
                     parameter: "rho",
