@@ -8,15 +8,12 @@ and σyy over the boxes x ∈ [−100, −80] m and [80, 100] m, |y + 501| ≤ 6
 abutment points of Table 2 (nodes 16475, 12485, 11496, 1911, frame
 ``"left"``) and at their mirror points. Levers:
 
-- ``--floor D``: a rigid floor D m below the block's base (the bottom of
-  the support layer), with rigid walls from the floor up to the base under
-  the abutments (x outside the undercut), so that the caved rock piles up
-  in a trough instead of falling without limit. The floor and walls are
-  separate bodies whose nodes are all fixed; the contact penalty stays the
-  one the block alone would have (the default k_n = E / h is set from the
-  block's facets, not the floor's). A floor too deep to be reached in the
-  run (``--floor 150``) is the control: the same bodies, numbering and
-  renumbering, nothing touched.
+- ``--floor D``: ``CavingCase.floor = D``, a rigid floor D m below the
+  block's base with walls under the abutments up to the base
+  (:mod:`fdem.caving_floor`), so that the caved rock piles up in the cave
+  instead of falling without limit. A floor too deep to be reached in the
+  run (``--floor 150``) is the control: the same bodies and numbering,
+  nothing touched.
 - ``--walls pinned``: the side walls fixed in x and y instead of rollers.
 
     python examples/caving_levers.py --until 3.5                   # the quick case to 3.5 s
@@ -50,57 +47,6 @@ WALL_CASES = (
     ("pinned", "geostatic", True),
     ("pinned", "zero", True),
 )
-
-
-def _part(mesh: Mesh, name: str) -> Mesh:
-    return mesh.with_sets(element_sets={name: np.arange(mesh.n_elements)})
-
-
-def with_floor(model: Model, case: CavingCase, depth: float) -> Model:
-    """``model`` (a :func:`caving_model`) on a rigid trough: a floor one
-    element thick whose top lies ``depth`` m below the block's base, and,
-    for ``depth`` > 0, walls under the abutments from the floor up to the
-    base. The block's elements, nodes, sets, loads, stages and contact
-    stiffness are the model's own; the trough's nodes are all fixed."""
-    size, half = case.size, 0.5 * case.undercut
-    nx = int(round(WIDTH / size))
-    parts = [_part(Mesh.rectangle(WIDTH, size, nx, 1, origin=(-0.5 * WIDTH, BOTTOM - depth - size)), "trough")]
-    if depth > 0:
-        wx = 0.5 * WIDTH - half
-        ny = max(1, int(round(depth / size)))
-        nxw = max(1, int(round(wx / size)))
-        for x0 in (-0.5 * WIDTH, half):
-            parts.append(_part(Mesh.rectangle(wx, depth, nxw, ny, origin=(x0, BOTTOM - depth)), "trough"))
-    mesh = Mesh.combine(model.mesh, *parts, prefixes=["", *(f"trough{i}_" for i in range(len(parts)))])
-    mesh = mesh.with_sets(element_sets={"trough": np.arange(model.mesh.n_elements, mesh.n_elements)})
-    mats = model._materials
-    owner = model._element_material
-    rock = mats[owner[model.mesh.elements("rock")[0]]]
-    cap = mats[owner[model.mesh.elements("cap")[0]]]
-    trough = Elastic(E=rock.E, nu=rock.nu, rho=rock.rho)
-    out = Model(mesh, materials={"rock": rock, "support": rock, "cap": cap, "trough": trough})
-    out.gravity = model.gravity
-    out._constraints = list(model._constraints)
-    out.fix(np.arange(model.mesh.n_nodes, mesh.n_nodes))
-    stress = np.zeros((mesh.n_elements, 4))
-    stress[: model.mesh.n_elements] = model._initial_stress
-    out.set_initial_stress(stress)
-    # the block's own penalty: k_n = p E / h with h the block's mean
-    # boundary-facet length (the trough's long facets would change h)
-    c = dict(model._contact)
-    bf = model.mesh.boundary_facets()
-    h = float(np.linalg.norm(np.diff(model.mesh.points[bf], axis=1), axis=2).mean())
-    young = max(m.E for m in mats)
-    laws = []
-    for law in c["laws"]:
-        k_n = law.normal_stiffness if law.normal_stiffness is not None else law.penalty_factor * young / h
-        laws.append(replace(law, normal_stiffness=k_n, shear_stiffness=law.shear_stiffness or k_n))
-    c["laws"] = laws
-    out._contact = c
-    out._fracture = dict(model._fracture)
-    out._stages = list(model._stages)
-    out._stage_ramps = list(model._stage_ramps)
-    return out
 
 
 def sample(sim: Any, frame: str = "left") -> dict[str, Any]:
@@ -212,11 +158,11 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     if args.renumber == "off":
         tag += "_renumber_off"
     out = Path(args.out or f"levers_{tag}")
+    if args.floor is not None:
+        case = replace(case, floor=args.floor)
     model = caving_model(case)
     if args.walls == "pinned":
         model.fix("left").fix("right")
-    if args.floor is not None:
-        model = with_floor(model, case, args.floor)
     wall0 = time.perf_counter()
     first = min(args.sample, args.until)
     summary = run_caving(out, replace(case, until=first), model=model, threads=args.threads, progress=False)

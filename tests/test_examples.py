@@ -5,7 +5,6 @@ from __future__ import annotations
 import importlib.util
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -139,26 +138,6 @@ def test_caving_levers_side_wall_check():
     pinned = levers.wall_stress("pinned", "zero", False)
     assert pinned["syy"] > -0.25 * abs(r["closed_form_syy"])
     assert abs(pinned["sxy"]) > 5.0
-
-
-def test_caving_levers_floor_holds_the_caved_rock(tmp_path):
-    """The floor lever (docs/caving.md, "What differs, and why"): the
-    quick case on a rigid floor at the block's base keeps its contact
-    stiffness and step, and by 1.3 s the column has come down onto the
-    floor (none of it below the base) instead of falling through."""
-    from fdem import Simulation
-    from fdem.caving import BOTTOM, CavingCase, caving_model
-
-    levers = load("caving_levers")
-    case = CavingCase.quick()
-    block = caving_model(case)
-    floor = levers.with_floor(block, case, 0.0)
-    a, b = block.kernel_arrays(), floor.kernel_arrays()
-    assert np.array_equal(a["contact_laws"][:, :2], b["contact_laws"][:, :2])
-    assert Simulation(floor, threads=1).time_step == Simulation(block, threads=1).time_step
-    rows = levers.main(["--floor", "0", "--until", "1.3", "--sample", "0.65", "--out", str(tmp_path)])
-    assert rows[-1]["below_base_m2"] == 0.0
-    assert rows[-1]["lowest_rock_y"] > BOTTOM
 
 
 def test_tunnel_example(tmp_path):
