@@ -63,6 +63,8 @@ def sample(sim: Any, frame: str = "left") -> dict[str, Any]:
         tags = (("", p), ("m", p * np.array([-1.0, 1.0]))) if node in ABUTMENT_NODES else (("", p),)
         for tag, q in tags:
             s = probe_stress(sim, q[None, :])[0] / 1e6
+            if tag == "m":  # the mirror point's shear, read in the mirrored frame
+                s[3] = -s[3]
             for k, name in enumerate(("sxx", "syy", "szz", "sxy")):
                 row[f"{node}{tag}_{name}"] = float(s[k])
     # the rock (the trough starts below the block's base, the rock above it)
