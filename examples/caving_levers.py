@@ -15,6 +15,13 @@ abutment points of Table 2 (nodes 16475, 12485, 11496, 1911, frame
   run (``--floor 150``) is the control: the same bodies and numbering,
   nothing touched.
 - ``--walls pinned``: the side walls fixed in x and y instead of rollers.
+- ``--renumber off``: no Hilbert renumbering, another numbering's
+  round-off (the spread a lever must exceed).
+
+``--paper`` runs the paper's scale instead (about 30 min on one thread).
+``--wall-check`` only compares the stress at node 1911 (the left wall,
+44 m below the top) in an elastic block under roller and pinned walls
+with the closed form (:func:`wall_stress`, seconds).
 
     python examples/caving_levers.py --until 3.5                   # the quick case to 3.5 s
     python examples/caving_levers.py --until 3.5 --floor 0         # with a floor under the support layer
@@ -32,10 +39,10 @@ from typing import Any
 
 import numpy as np
 from fdem import Elastic, Mesh, Model
-from fdem.caving import BOTTOM, WIDTH, CavingCase, caving_model, run_caving
+from fdem.caving import BOTTOM, WIDTH, CavingCase, caving_model, probe_stress, run_caving
 from fdem.caving_stress import ABUTMENT_LINE, PAPER_TABLE2, probe_points, stress_profile
 
-#: The paper's abutment points (Table 2) and their stresses (MPa): node, σxx, σyy.
+#: The paper's Table 2 nodes in the left abutment (frame ``"left"``).
 ABUTMENT_NODES = ("16475", "12485", "11496", "1911")
 
 #: The side-wall conditions and starts of the elastic check (:func:`wall_stress`).
@@ -56,8 +63,6 @@ def sample(sim: Any, frame: str = "left") -> dict[str, Any]:
     for side, edges in (("left", [-100.0, -80.0]), ("right", [80.0, 100.0])):
         s = stress_profile(sim, ABUTMENT_LINE, np.array(edges), 6.0)[0] / 1e6
         row[f"{side}_box_sxx"], row[f"{side}_box_syy"] = float(s[0]), float(s[1])
-    from fdem.caving import probe_stress
-
     pts = probe_points(frame, WIDTH)
     for (node, *_), p in zip(PAPER_TABLE2, pts, strict=True):
         tags = (("", p), ("m", p * np.array([-1.0, 1.0]))) if node in ABUTMENT_NODES else (("", p),)
