@@ -64,6 +64,13 @@ def main(argv: list[str] | None = None) -> dict:
         default=None,
         help="where the paper's Table 2 x is measured from: the block's left side (default) or its midline",
     )
+    ap.add_argument(
+        "--floor",
+        type=float,
+        default=None,
+        help="a rigid floor this many m below the block's base that keeps the caved rock in the cave "
+        "(default: none, free fall; docs/caving.md)",
+    )
     ap.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
     ap.add_argument("--quiet", action="store_true", help="no progress display")
     ap.add_argument(
@@ -86,6 +93,8 @@ def main(argv: list[str] | None = None) -> dict:
         case = replace(case, mass_scaling=None if off else float(args.mass_scaling))
     if args.probe_frame is not None:
         case = replace(case, probe_frame=args.probe_frame)
+    if args.floor is not None:
+        case = replace(case, floor=args.floor)
     out = args.out or ("caving_output_quick" if args.quick else "caving_output")
     try:
         return run_caving(out, case, threads=args.threads, progress=not args.quiet, resume=args.resume)

@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .caving_floor import block_penalty, with_trough
 from .caving_metrics import caving_metrics, subsidence_profile
 from .caving_stress import (
     ABUTMENT_LINE,
@@ -348,9 +349,16 @@ class CavingCase:
     its region; ``(time, x_from, x_to)`` is short for the box over the
     support layer between those x (``undercut`` still names the
     undercut's full width, whose edges the abutment and metrics read;
-    :meth:`undercut_width` is the width the stages have opened). The case
-    round-trips through JSON (:meth:`to_json`, :meth:`from_json`,
-    :meth:`save`, :meth:`load`), which names the field of any bad value."""
+    :meth:`undercut_width` is the width the stages have opened). ``floor``
+    puts the block on a rigid trough whose floor lies ``floor`` m below the
+    block's base (walls under the abutments up to the base), so that the
+    caved rock stays in the cave (:mod:`fdem.caving_floor`); ``None`` (the
+    default, the paper's "the material is allowed to fall freely") has
+    none. With the floor at the base (0) the paper-scale abutments carry
+    what the paper's Table 2 gives there much more nearly (docs/caving.md,
+    "What differs, and why"). The case round-trips through JSON
+    (:meth:`to_json`, :meth:`from_json`, :meth:`save`, :meth:`load`),
+    which names the field of any bad value."""
 
     size: float = 1.0
     joint_scale: float = 1.0
@@ -379,6 +387,7 @@ class CavingCase:
     crack_law: Interface | None = None
     top_pressure: float = TOP_PRESSURE
     regions: tuple[UndercutStage, ...] | None = None
+    floor: float | None = None
 
     def __post_init__(self) -> None:
         if self.probe_frame not in FRAMES:
@@ -408,6 +417,8 @@ class CavingCase:
                 raise ValueError(f"CavingCase.{name} must be a fdem.Interface, got {type(law).__name__}")
         if not (math.isfinite(self.top_pressure) and self.top_pressure >= 0):
             raise ValueError(f"CavingCase.top_pressure = {self.top_pressure} must be a finite pressure >= 0 (Pa)")
+        if self.floor is not None and not (math.isfinite(self.floor) and self.floor >= 0):
+            raise ValueError(f"CavingCase.floor = {self.floor} must be a depth >= 0 (m below the base) or None")
         if self.overburden == "mass" and not self.cap > 0:
             raise ValueError(f"CavingCase.overburden = 'mass' needs a cap layer to carry it; cap = {self.cap}")
 
@@ -513,7 +524,8 @@ def _case_value(source: str, key: str, value: Any, default: Any) -> Any:
             except (TypeError, ValueError) as exc:
                 raise ValueError(f"{source}: joints[{i}]: {exc}") from None
         return tuple(out)
-    if value is None and key in ("mass_scaling", "renumber", "k0", "rock", "joint_law", "crack_law", "regions"):
+    nullable = ("mass_scaling", "renumber", "k0", "rock", "joint_law", "crack_law", "regions", "floor")
+    if value is None and key in nullable:
         return None
     if key == "regions":
         if not isinstance(value, list):
@@ -543,7 +555,7 @@ def _case_value(source: str, key: str, value: Any, default: Any) -> Any:
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ValueError(f"{source}: {key} must be a finite number, got {value!r}")
-    if value < 0 or (value == 0 and key not in ("start", "cap", "k0", "top_pressure")):
+    if value < 0 or (value == 0 and key not in ("start", "cap", "k0", "top_pressure", "floor")):
         raise ValueError(f"{source}: {key} = {value!r} must be positive")
     return float(value)
 
@@ -594,7 +606,9 @@ def caving_model(case: CavingCase | None = None) -> Model:
         done[ids] = True
         element_sets[f"undercut_{k}"] = ids
         times.append(at)
-    mesh = mesh.with_sets(element_sets=element_sets)
+    mesh = block = mesh.with_sets(element_sets=element_sets)
+    if case.floor is not None:
+        mesh = with_trough(block, width=WIDTH, bottom=BOTTOM, undercut=case.undercut, size=case.size, depth=case.floor)
     g = UNIT_WEIGHT / ROCK.rho
     # the rock's material (``rock`` above holds its element ids)
     material, p = case.rock or ROCK, case.top_pressure
@@ -604,8 +618,13 @@ def caving_model(case: CavingCase | None = None) -> Model:
     cap_area = float(mesh.areas()[cap].sum())
     rho_cap = material.rho + (p * WIDTH / (g * cap_area) if case.overburden == "mass" else 0.0)
     elastic = Elastic(E=material.E, nu=material.nu, rho=rho_cap)
-    model = Model(mesh, materials={"rock": material, "support": material, "cap": elastic}).set_gravity(0.0, -g)
+    materials: dict[str, Any] = {"rock": material, "support": material, "cap": elastic}
+    if case.floor is not None:
+        materials["trough"] = Elastic(E=material.E, nu=material.nu, rho=material.rho)
+    model = Model(mesh, materials=materials).set_gravity(0.0, -g)
     model.fix("left", x=True, y=False).fix("right", x=True, y=False).fix("bottom")
+    if case.floor is not None:
+        model.fix("trough")
     model.set_geostatic_stress(top=TOP, pressure=p, k0=case.k0)
     if case.overburden == "pressure":
         model.pressure("top", p)
@@ -613,9 +632,11 @@ def caving_model(case: CavingCase | None = None) -> Model:
         # the heavy cap's own lithostatic state; below it the same as
         # with the pressure
         model.set_geostatic_stress(top=TOP, pressure=0.0, k0=case.k0, where="cap")
-    model.contact(
-        Interface(damping=0.5), interfaces={"joints": case.joint_law or JOINTS}, cracks=case.crack_law or CRACKS
-    )
+    laws = [Interface(damping=0.5), case.joint_law or JOINTS, case.crack_law or CRACKS]
+    if case.floor is not None:
+        model.set_initial_stress((0.0, 0.0, 0.0, 0.0), where="trough")
+        laws = [block_penalty(law, block, max(material.E, elastic.E)) for law in laws]
+    model.contact(laws[0], interfaces={"joints": laws[1]}, cracks=laws[2])
     model.fracture(insert_at=case.insert_at, min_size=case.min_size, check_every=case.check_every)
     for k, at in enumerate(times, start=1):
         model.excavate(f"undercut_{k}", at=at)
@@ -896,7 +917,9 @@ def run_caving(
     figures.append(fig5.name)
     abutment = _write_stress_tables(out, sim, case, probe_rows, book["abutment"], points, lithostatic)
     final_metrics = _write_metrics(out, sim, book["metrics"], case)
-    frags = sim.fragments()
+    # the rock's (a floor's trough starts below the block's base)
+    y_ref = sim.reference_positions()[sim.triangles()].mean(axis=1)[:, 1]
+    frags = sim.fragments(where=y_ref >= BOTTOM)
     with open(out / "fragments.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["fragment", "area_m2", "mass_kg_per_m", "x_m", "y_m", "elements"])
@@ -907,11 +930,10 @@ def run_caving(
     e = sim.energies()
     x = sim.positions()
     y = x[sim.triangles()].mean(axis=1)[:, 1]
-    caved = sim.active() & (y < BOTTOM)
+    caved = sim.active() & (y < BOTTOM) & (y_ref >= BOTTOM)
     # rock (not support) that has fallen into the undercut: below the top of
     # the support layer, which every rock element started above
     level = BOTTOM + case.support
-    y_ref = sim.reference_positions()[sim.triangles()].mean(axis=1)[:, 1]
     fallen = sim.active() & (y_ref >= level) & (y < level)
     # what the balance is measured against: the energy put in since
     # equilibrium (work of gravity, the top pressure and the supports)

@@ -641,12 +641,16 @@ class Simulation:
         form one fragment, numbered from 0; excavated elements get -1."""
         return self._core.fragment_labels()
 
-    def fragments(self) -> dict[str, NDArray[Any]]:
+    def fragments(self, where: Any = None) -> dict[str, NDArray[Any]]:
         """Fragments (bodies) now: per fragment its ``area`` (m²), ``mass``
         (kg per unit thickness), ``centroid`` (k, 2) and number of
-        ``elements``, largest first."""
+        ``elements``, largest first. ``where`` (a boolean mask over the
+        elements) counts only those elements, and the bodies that hold
+        any of them."""
         labels = self.fragment_labels()
         keep = labels >= 0
+        if where is not None:
+            keep &= np.asarray(where, dtype=bool)
         lab = labels[keep]
         k = int(lab.max()) + 1 if len(lab) else 0
         tri = self.triangles()[keep]
@@ -660,6 +664,8 @@ class Simulation:
         cy = np.bincount(lab, weights=mass * c[:, 1], minlength=k) / np.maximum(m, 1e-300)
         count = np.bincount(lab, minlength=k)
         order = np.argsort(-area, kind="stable")
+        if where is not None:
+            order = order[count[order] > 0]
         return {
             "area": area[order],
             "mass": m[order],
