@@ -34,6 +34,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use crate::clock::Clock;
 use crate::contact::ContactModel;
 use crate::energy::{ElementPartial, Energies, NodePartial};
 use crate::fracture::FractureModel;
@@ -197,11 +198,9 @@ saved_state! {
     omega: Vec<f64>,
     gravity: Vec2,
     settings: Settings,
-    time: f64,
-    step: u64,
-    dt: f64,
-    dt_prev: f64,
-    dt_critical: f64,
+    // written as its five fields (`Clock`): time, step, dt, dt_prev,
+    // dt_critical
+    clock: Clock,
     energies: Energies,
     held_seen: f64,
 }

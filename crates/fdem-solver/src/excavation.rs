@@ -99,7 +99,7 @@ impl Simulation {
         self.refresh_forces();
         // the loads act from now: before the whole-step velocities are kept
         if !load.is_empty() {
-            let mut release = crate::Release { start: self.time, ramp, nodes: Vec::new(), forces: Vec::new() };
+            let mut release = crate::Release { start: self.clock.time(), ramp, nodes: Vec::new(), forces: Vec::new() };
             for (v, f) in load {
                 if self.nodes.mass[v as usize] <= 0.0 {
                     continue; // the node left with the elements
@@ -143,7 +143,7 @@ impl Simulation {
     /// any ran.
     pub(crate) fn excavate_due(&mut self) -> bool {
         let mut ran = false;
-        while self.next_stage < self.stages.len() && self.stages[self.next_stage].time <= self.time {
+        while self.next_stage < self.stages.len() && self.stages[self.next_stage].time <= self.clock.time() {
             let stage = std::mem::take(&mut self.stages[self.next_stage].elements);
             // ids were checked at set-up; a stage removes the pieces
             // cracks have cut from its elements too
@@ -184,8 +184,7 @@ impl Simulation {
             cohesive_elastic: old.cohesive_elastic,
             ..Energies::default()
         };
-        self.time = 0.0;
-        self.step = 0;
+        self.clock.restart();
         self.next_stage = 0;
         while self.next_stage < self.stages.len() && self.stages[self.next_stage].time < 0.0 {
             self.next_stage += 1;

@@ -18,6 +18,7 @@
 //! same for any number of threads.
 
 mod checkpoint;
+mod clock;
 mod contact;
 mod energy;
 mod error;

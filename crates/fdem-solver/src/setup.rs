@@ -9,6 +9,7 @@ use fdem_element::lumped_mass;
 use fdem_material::{Elastic, PlasticState};
 use fdem_mesh::{node_elements, validate};
 
+use crate::clock::Clock;
 use crate::contact::ContactModel;
 use crate::energy::{ElementPartial, Energies, NodePartial};
 use crate::error::SetupError;
@@ -273,11 +274,7 @@ impl Simulation {
             omega: vec![0.0; m],
             gravity: spec.gravity,
             settings: spec.settings,
-            time: 0.0,
-            step: 0,
-            dt: 0.0,
-            dt_prev: 0.0,
-            dt_critical: f64::INFINITY,
+            clock: Clock::default(),
             energies: Energies::default(),
             held_seen: 0.0,
             node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],

@@ -11,6 +11,7 @@ use fdem_element::{ReferenceShape, Vec2};
 use fdem_material::PlasticState;
 use fdem_mesh::Csr;
 
+use crate::clock::Clock;
 use crate::contact::{AssemblyOut, ContactModel};
 use crate::energy::{ElementPartial, Energies, NodePartial};
 use crate::error::{RunError, SetupError};
@@ -163,14 +164,8 @@ pub struct Simulation {
     pub(crate) omega: Vec<f64>,
     pub(crate) gravity: Vec2,
     pub(crate) settings: Settings,
-    pub(crate) time: f64,
-    pub(crate) step: u64,
-    /// `Δt^{n+½}`, the next position step (s).
-    pub(crate) dt: f64,
-    /// `Δt^{n−½}`, the last position step (s); zero before the first step.
-    pub(crate) dt_prev: f64,
-    /// Critical step before the safety factor (s).
-    pub(crate) dt_critical: f64,
+    /// Time, step count and the step sizes around the current step.
+    pub(crate) clock: Clock,
     pub(crate) energies: Energies,
     /// Held energy (kinetic + elastic) at the last energy-growth check: the
     /// watchdog's growth test and report.
@@ -221,7 +216,7 @@ impl Simulation {
     /// Holds the constrained components of the initial velocity at their
     /// prescribed values at `t = 0`.
     pub(crate) fn apply_prescribed_initial_velocity(&mut self) {
-        self.eval_amplitudes(self.time);
+        self.eval_amplitudes(self.clock.time());
         for c in &self.constraints {
             let amp = c.amplitude.map_or(1.0, |k| self.amplitude_values[k as usize]);
             for d in 0..2 {
@@ -303,7 +298,7 @@ impl Simulation {
     /// phase clocks.
     fn finish_surface_forces(&mut self, contact: Option<ContactOutcome>) {
         let clock = Instant::now();
-        self.eval_amplitudes(self.time);
+        self.eval_amplitudes(self.clock.time());
         passes::pressure_forces(&self.nodes.x, &self.pressure, &self.amplitude_values, &mut self.pressure_force);
         if let (Some(contact), Some(out)) = (&self.contact, contact) {
             self.energies.friction += out.sum.friction;
@@ -371,8 +366,7 @@ impl Simulation {
                 }
             }
         }
-        self.dt_critical = crit;
-        self.dt = self.settings.fixed_dt.unwrap_or(self.settings.safety * crit);
+        self.clock.set_step(crit, &self.settings);
         self.phase_times.time_step += clock.elapsed().as_secs_f64();
     }
 
@@ -580,7 +574,7 @@ impl Simulation {
         }
         need.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
         need.dedup_by_key(|p| p.0); // keeps the largest factor of each element
-        let started = self.dt_prev > 0.0;
+        let started = self.clock.started();
         for &(e, s) in &need {
             self.elems.mass_scale[e as usize] *= s;
         }
@@ -624,15 +618,16 @@ impl Simulation {
 
     /// Advances one step.
     fn step_once(&mut self) -> Result<(), RunError> {
-        if !self.elastic_stage && self.next_stage < self.stages.len() && self.stages[self.next_stage].time <= self.time
+        if !self.elastic_stage
+            && self.next_stage < self.stages.len()
+            && self.stages[self.next_stage].time <= self.clock.time()
         {
             let clock = Instant::now();
             self.excavate_due();
             self.phase_times.topology += clock.elapsed().as_secs_f64();
         }
-        let dt = self.dt;
-        let dt_avg = 0.5 * (self.dt_prev + dt);
-        self.eval_amplitudes(self.time + 0.5 * dt);
+        let (dt, dt_avg) = (self.clock.dt(), self.clock.dt_avg());
+        self.eval_amplitudes(self.clock.mid_step());
         let clock = Instant::now();
         {
             let n = self.nodes.x.len();
@@ -662,7 +657,7 @@ impl Simulation {
                 release: &self.release_force,
                 dt_avg,
                 dt,
-                dt_prev: self.dt_prev,
+                dt_prev: self.clock.dt_prev(),
             };
             // with contact dashpots in two stages: the damped nodes'
             // predicted velocities, the dashpots on them, those nodes moved
@@ -683,9 +678,7 @@ impl Simulation {
             }
         }
         self.phase_times.nodes += clock.elapsed().as_secs_f64();
-        self.time += dt;
-        self.step += 1;
-        self.dt_prev = dt;
+        self.clock.advance();
         if !self.released.is_empty() || !self.release_force.is_empty() {
             self.update_release();
         }
@@ -705,7 +698,7 @@ impl Simulation {
         }
         if let Some((node, quantity)) = bad_node {
             let node = self.layout.node_id(node);
-            return Err(RunError::NonFinite { node, quantity, step: self.step, time: self.time });
+            return Err(RunError::NonFinite { node, quantity, step: self.clock.step(), time: self.clock.time() });
         }
         // how far the step can have moved any node: lets the broad phase
         // skip its scan of the boundary nodes while no node can be near
@@ -774,7 +767,7 @@ impl Simulation {
         }
         if let Some(element) = bad_element {
             let element = self.layout.elem_id(element);
-            return Err(RunError::InvertedElement { element, step: self.step, time: self.time });
+            return Err(RunError::InvertedElement { element, step: self.clock.step(), time: self.clock.time() });
         }
         // Contact at x^{n+1} on the surfaces the step moved (evaluated
         // above, beside the element pass): this step's slip and friction,
@@ -786,7 +779,7 @@ impl Simulation {
         // every insertion step (measured: 1.5×10⁶ J in 300 steps of the
         // block-caving case).
         self.finish_surface_forces(contact);
-        if !self.elastic_stage && self.fracture.as_ref().is_some_and(|f| self.step % f.interval as u64 == 0) {
+        if !self.elastic_stage && self.fracture.as_ref().is_some_and(|f| self.clock.every(f.interval as u64)) {
             let clock = Instant::now();
             let topology = self.phase_times.topology;
             // a change of topology rebuilds forces (and contact) itself
@@ -797,7 +790,7 @@ impl Simulation {
                 return Ok(()); // rebuilt forces, contact and the stable step
             }
         }
-        if self.settings.fixed_dt.is_none() && self.step % self.settings.dt_interval as u64 == 0 {
+        if self.settings.fixed_dt.is_none() && self.clock.every(self.settings.dt_interval as u64) {
             self.update_time_step_for(None, false);
         }
         self.renumber_if_due(false);
@@ -809,7 +802,7 @@ impl Simulation {
     fn step_watched(&mut self) -> Result<(), RunError> {
         self.step_once()?;
         let limit = self.settings.energy_growth;
-        if limit > 0.0 && self.step % crate::ENERGY_CHECK_INTERVAL == 0 {
+        if limit > 0.0 && self.clock.every(crate::ENERGY_CHECK_INTERVAL) {
             // Energy created is `−residual`, with the whole-step kinetic
             // energy. That of a mode with `ω Δt / 2 = s` differs from the
             // energy the central-difference scheme conserves by up to the
@@ -840,8 +833,8 @@ impl Simulation {
                     created,
                     largest,
                     held: [before, held],
-                    step: self.step,
-                    time: self.time,
+                    step: self.clock.step(),
+                    time: self.clock.time(),
                 });
             }
         }
@@ -867,7 +860,7 @@ impl Simulation {
         let pool = Arc::clone(&self.pool);
         pool.install(|| {
             let mut taken = 0;
-            while self.time < until && taken < max_steps {
+            while self.clock.time() < until && taken < max_steps {
                 self.step_watched()?;
                 taken += 1;
             }
@@ -1050,7 +1043,7 @@ impl Simulation {
     /// (the array is emptied once none is left, so a run without them pays
     /// nothing).
     pub(crate) fn update_release(&mut self) {
-        let t = self.time;
+        let t = self.clock.time();
         self.released.retain(|r| r.share(t) > 0.0);
         if self.released.is_empty() {
             self.release_force.clear();
