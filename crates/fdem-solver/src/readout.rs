@@ -548,15 +548,16 @@ impl Simulation {
             sum[0] += kinetic_chunk;
         }
         let [kinetic, external, support, damping, contact, contact_damping] = sum;
+        let acc = &self.ledger.account;
         Energies {
             kinetic,
             elastic: self.elastic_energy(),
-            external_work: self.energies.external_work + external,
-            support_work: self.energies.support_work + support,
-            mass_damping: self.energies.mass_damping + damping,
-            contact_work: self.energies.contact_work + contact,
-            contact_damping: self.energies.contact_damping + contact_damping,
-            ..self.energies
+            external_work: acc.external_work + external,
+            support_work: acc.support_work + support,
+            mass_damping: acc.mass_damping + damping,
+            contact_work: acc.contact_work + contact,
+            contact_damping: acc.contact_damping + contact_damping,
+            ..*acc
         }
     }
 }

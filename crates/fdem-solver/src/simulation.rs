@@ -13,7 +13,7 @@ use fdem_mesh::Csr;
 
 use crate::clock::Clock;
 use crate::contact::{AssemblyOut, ContactModel};
-use crate::energy::{ElementPartial, Energies, NodePartial};
+use crate::energy::EnergyLedger;
 use crate::error::{RunError, SetupError};
 use crate::loads::{Amplitude, Constraint, PressureLoad};
 use crate::model::Settings;
@@ -166,12 +166,9 @@ pub struct Simulation {
     pub(crate) settings: Settings,
     /// Time, step count and the step sizes around the current step.
     pub(crate) clock: Clock,
-    pub(crate) energies: Energies,
-    /// Held energy (kinetic + elastic) at the last energy-growth check: the
-    /// watchdog's growth test and report.
-    pub(crate) held_seen: f64,
-    pub(crate) node_partials: Vec<NodePartial>,
-    pub(crate) elem_partials: Vec<ElementPartial>,
+    /// The energy account, the passes' partial sums that feed it, and the
+    /// watchdog's last look.
+    pub(crate) ledger: EnergyLedger,
     /// Per boundary node: its frequency with its contact springs
     /// ([`Simulation::contact_node_frequency`]) at the last stable-step
     /// evaluation (scratch; sized by it).
@@ -236,7 +233,7 @@ impl Simulation {
     /// Recomputes element and surface forces at the current configuration
     /// without advancing the stress.
     pub(crate) fn refresh_forces(&mut self) {
-        let Simulation { nodes, elems, elem_partials, .. } = self;
+        let Simulation { nodes, elems, ledger, .. } = self;
         let inp = ElementInputs {
             x: &nodes.x,
             v: &nodes.v,
@@ -251,7 +248,7 @@ impl Simulation {
             dt: 0.0,
             plastic: !self.elastic_stage,
         };
-        passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, elem_partials);
+        passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, &mut ledger.elem_partials);
         self.surface_forces(0.0);
     }
 
@@ -301,8 +298,8 @@ impl Simulation {
         self.eval_amplitudes(self.clock.time());
         passes::pressure_forces(&self.nodes.x, &self.pressure, &self.amplitude_values, &mut self.pressure_force);
         if let (Some(contact), Some(out)) = (&self.contact, contact) {
-            self.energies.friction += out.sum.friction;
-            self.energies.contact_elastic = out.sum.stored;
+            self.ledger.account.friction += out.sum.friction;
+            self.ledger.account.contact_elastic = out.sum.stored;
             self.contact_stats = ContactStats {
                 pairs_evaluated: contact.pairs_evaluated,
                 broad_phase_builds: contact.broad.builds,
@@ -605,7 +602,7 @@ impl Simulation {
                 self.set_whole_step_velocity(v as usize, [vn[0] * k, vn[1] * k]);
             }
             let after = terms(self);
-            let acc = &mut self.energies;
+            let acc = &mut self.ledger.account;
             acc.external_work += before[1] - after[1];
             acc.support_work += before[2] - after[2];
             acc.mass_damping += before[3] - after[3];
@@ -639,7 +636,8 @@ impl Simulation {
             if self.dashpot_force.len() != self.contact_damped.len() {
                 self.dashpot_force.resize(self.contact_damped.len(), [0.0; 2]);
             }
-            let Simulation { nodes, elems, node_partials, pred_v, pred_f, dashpot_force, contact, .. } = self;
+            let Simulation { nodes, elems, ledger, pred_v, pred_f, dashpot_force, contact, .. } = self;
+            let node_partials = &mut ledger.node_partials;
             let inp = NodeInputs {
                 mass: &nodes.mass,
                 bnode: &self.surface.index_of,
@@ -682,20 +680,7 @@ impl Simulation {
         if !self.released.is_empty() || !self.release_force.is_empty() {
             self.update_release();
         }
-        let mut bad_node = None;
-        let mut max_speed2 = 0.0f64;
-        for p in &self.node_partials {
-            // a NaN is kept (the run stops below at the bad node anyway)
-            if p.max_speed2 > max_speed2 || p.max_speed2.is_nan() {
-                max_speed2 = p.max_speed2;
-            }
-            self.energies.external_work += p.external;
-            self.energies.contact_work += p.contact;
-            self.energies.contact_damping -= p.contact_damping;
-            self.energies.support_work += p.support;
-            self.energies.mass_damping += p.damping;
-            bad_node = bad_node.or(p.bad_node);
-        }
+        let (max_speed2, bad_node) = self.ledger.add_node_partials();
         if let Some((node, quantity)) = bad_node {
             let node = self.layout.node_id(node);
             return Err(RunError::NonFinite { node, quantity, step: self.clock.step(), time: self.clock.time() });
@@ -718,14 +703,7 @@ impl Simulation {
         let searched = self.contact.as_mut().map(|c| search_contact(c, &self.surface, &self.nodes, dt));
         let contact = {
             let Simulation {
-                nodes,
-                elems,
-                elem_partials,
-                contact,
-                contact_force,
-                contact_damping_force,
-                contact_damped,
-                ..
+                nodes, elems, ledger, contact, contact_force, contact_damping_force, contact_damped, ..
             } = self;
             let inp = ElementInputs {
                 x: &nodes.x,
@@ -744,7 +722,13 @@ impl Simulation {
             let (elements, contact) = rayon::join(
                 || {
                     let clock = Instant::now();
-                    passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, elem_partials);
+                    passes::element_pass(
+                        &inp,
+                        &mut elems.stress,
+                        &mut elems.state,
+                        &mut elems.force,
+                        &mut ledger.elem_partials,
+                    );
                     clock.elapsed().as_secs_f64()
                 },
                 || {
@@ -757,15 +741,7 @@ impl Simulation {
             self.phase_times.elements += elements;
             contact
         };
-        let mut bad_element = None;
-        for p in &self.elem_partials {
-            self.energies.internal_work += p.internal;
-            self.energies.viscous_damping += p.viscous;
-            self.energies.plastic += p.plastic;
-            self.energies.fracture += p.fracture;
-            bad_element = bad_element.or(p.bad_element);
-        }
-        if let Some(element) = bad_element {
+        if let Some(element) = self.ledger.add_element_partials() {
             let element = self.layout.elem_id(element);
             return Err(RunError::InvertedElement { element, step: self.clock.step(), time: self.clock.time() });
         }
@@ -803,40 +779,10 @@ impl Simulation {
         self.step_once()?;
         let limit = self.settings.energy_growth;
         if limit > 0.0 && self.clock.every(crate::ENERGY_CHECK_INTERVAL) {
-            // Energy created is `−residual`, with the whole-step kinetic
-            // energy. That of a mode with `ω Δt / 2 = s` differs from the
-            // energy the central-difference scheme conserves by up to the
-            // factor 1 / (1 − s²) (5.3 at s = 0.9): a stable run with its
-            // energy in the highest modes shows several percent "created".
-            // The scheme conserves `½ m v^{n−½}·v^{n+½} + E_el` exactly for
-            // linear undamped motion; its kinetic part is the whole-step
-            // one less `½ m |vⁿ − v^{n−½}|²` (`kinetic_lag`). Energy
-            // created in that measure (a contact switched on and off
-            // out of phase, a wrong force) stops the run. That measure
-            // stays constant through a linear instability, though (it is
-            // indefinite there), so growth stops the run too: the held
-            // energy grown at least sixteenfold since the last check while
-            // the whole-step balance shows the energy created, which a
-            // bounded oscillation cannot do below s = 0.96. Until
-            // 2026-11-25 only the second rule stopped runs, and two bars
-            // whose contact tripled their energy in a few hundred steps
-            // ran on with a warning (issue 32).
+            // (the rules and why: `EnergyLedger::watch`)
             let e = self.energies();
-            let held = e.kinetic + e.elastic;
-            let before = std::mem::replace(&mut self.held_seen, held);
-            let created = -e.residual();
-            let largest = e.largest_term();
-            let growing = before > 0.0 && held >= 16.0 * before;
-            let conserved_created = created - self.kinetic_lag();
-            if conserved_created > limit * largest || (growing && created > limit * largest) {
-                return Err(RunError::EnergyGrowth {
-                    created,
-                    largest,
-                    held: [before, held],
-                    step: self.clock.step(),
-                    time: self.clock.time(),
-                });
-            }
+            let lag = self.kinetic_lag();
+            self.ledger.watch(&e, lag, limit, &self.clock)?;
         }
         Ok(())
     }
