@@ -33,6 +33,7 @@ mod readout;
 mod renumber;
 mod setup;
 mod simulation;
+mod stable_step;
 mod topology;
 
 /// Steps between checks of the energy-growth watchdog
