@@ -34,15 +34,15 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use crate::clock::Clock;
 use crate::contact::ContactModel;
-use crate::energy::{ElementPartial, Energies, NodePartial};
+use crate::energy::EnergyLedger;
 use crate::fracture::FractureModel;
 use crate::loads::{Amplitude, Constraint, PressureLoad};
 use crate::model::{ExcavationStage, Settings};
 use crate::passes::{Material, PressureFacet};
 use crate::renumber::Layout;
 use crate::simulation::{ContactStats, Elements, Nodes, PhaseTimes, Simulation};
-use crate::CHUNK;
 use fdem_contact::{ContactState, Dashpot, NodeContact, Surface};
 use fdem_element::Vec2;
 use fdem_mesh::Csr;
@@ -143,8 +143,6 @@ macro_rules! saved_state {
             let mut sim = Simulation {
                 $($field: o.$field,)*
                 phase_times: PhaseTimes::default(),
-                node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],
-                elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
                 contact_omega: Vec::new(),
                 omega_carry: Default::default(),
                 released: Vec::new(),
@@ -165,6 +163,7 @@ macro_rules! saved_state {
                 c.mark_busy();
             }
             // per-chunk partial sums are sized, never resized, by the passes
+            sim.ledger.size_partials(n, m);
             if let Some(c) = sim.contact.as_mut() {
                 c.size_scratch(&sim.surface);
             }
@@ -197,13 +196,11 @@ saved_state! {
     omega: Vec<f64>,
     gravity: Vec2,
     settings: Settings,
-    time: f64,
-    step: u64,
-    dt: f64,
-    dt_prev: f64,
-    dt_critical: f64,
-    energies: Energies,
-    held_seen: f64,
+    // written as its five fields (`Clock`): time, step, dt, dt_prev,
+    // dt_critical
+    clock: Clock,
+    // written as the account and the held energy (`EnergyLedger`)
+    ledger: EnergyLedger,
 }
 
 /// What format 2 added, written after the format-1 state (so a format-1
@@ -221,14 +218,14 @@ impl Format2 {
         Format2 {
             mass_scale: s.elems.mass_scale.clone(),
             mass_scaling: s.settings.mass_scaling,
-            mass_scaling_energy: s.energies.mass_scaling,
+            mass_scaling_energy: s.ledger.account.mass_scaling,
         }
     }
 
     fn apply(self, o: &mut StateOwned) {
         o.elems.mass_scale = self.mass_scale;
         o.settings.mass_scaling = self.mass_scaling;
-        o.energies.mass_scaling = self.mass_scaling_energy;
+        o.ledger.account.mass_scaling = self.mass_scaling_energy;
     }
 }
 

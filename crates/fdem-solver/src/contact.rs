@@ -223,7 +223,7 @@ impl ContactModel {
     /// Whether some interface law's dashpot is too weak to damp a rattling
     /// contact (damping ratio below [`RATTLE_DAMPING`]): then the stable
     /// step must also keep contact onsets accurate
-    /// ([`contact_bound`](crate::simulation::contact_bound)).
+    /// ([`contact_bound`](crate::stable_step::contact_bound)).
     pub fn may_rattle(&self) -> bool {
         self.laws.iter().any(|l| l.damping_ratio < RATTLE_DAMPING)
     }

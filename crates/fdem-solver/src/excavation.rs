@@ -99,7 +99,7 @@ impl Simulation {
         self.refresh_forces();
         // the loads act from now: before the whole-step velocities are kept
         if !load.is_empty() {
-            let mut release = crate::Release { start: self.time, ramp, nodes: Vec::new(), forces: Vec::new() };
+            let mut release = crate::Release { start: self.clock.time(), ramp, nodes: Vec::new(), forces: Vec::new() };
             for (v, f) in load {
                 if self.nodes.mass[v as usize] <= 0.0 {
                     continue; // the node left with the elements
@@ -117,7 +117,7 @@ impl Simulation {
         }
         self.keep_whole_step_velocities(&v_n);
         let after = self.energies();
-        self.energies.excavated += self.keep_work_continuous(&before, &after);
+        self.ledger.account.excavated += self.keep_work_continuous(&before, &after);
         // after the booking: mass scaling books its own change
         self.update_time_step();
         Ok(remove.len())
@@ -130,7 +130,7 @@ impl Simulation {
     /// and bond springs) the change took away, for the caller to book.
     pub(crate) fn keep_work_continuous(&mut self, before: &Energies, after: &Energies) -> f64 {
         let held = |e: &Energies| e.kinetic + e.elastic + e.contact_elastic + e.cohesive_elastic;
-        let acc = &mut self.energies;
+        let acc = &mut self.ledger.account;
         acc.external_work += before.external_work - after.external_work;
         acc.support_work += before.support_work - after.support_work;
         acc.mass_damping += before.mass_damping - after.mass_damping;
@@ -143,7 +143,7 @@ impl Simulation {
     /// any ran.
     pub(crate) fn excavate_due(&mut self) -> bool {
         let mut ran = false;
-        while self.next_stage < self.stages.len() && self.stages[self.next_stage].time <= self.time {
+        while self.next_stage < self.stages.len() && self.stages[self.next_stage].time <= self.clock.time() {
             let stage = std::mem::take(&mut self.stages[self.next_stage].elements);
             // ids were checked at set-up; a stage removes the pieces
             // cracks have cut from its elements too
@@ -169,8 +169,8 @@ impl Simulation {
     pub fn restart_clock(&mut self) {
         let e = self.energies();
         let pending = |reported: f64, accumulated: f64| accumulated - reported;
-        let old = self.energies;
-        self.energies = Energies {
+        let old = self.ledger.account;
+        self.ledger.account = Energies {
             kinetic_initial: e.kinetic,
             elastic_initial: e.elastic + e.contact_elastic + e.cohesive_elastic,
             // the work still pending at this whole step is booked against
@@ -184,8 +184,7 @@ impl Simulation {
             cohesive_elastic: old.cohesive_elastic,
             ..Energies::default()
         };
-        self.time = 0.0;
-        self.step = 0;
+        self.clock.restart();
         self.next_stage = 0;
         while self.next_stage < self.stages.len() && self.stages[self.next_stage].time < 0.0 {
             self.next_stage += 1;

@@ -294,7 +294,7 @@ impl Simulation {
         let inner = (self.phase_times.surface, self.phase_times.broad_phase, self.phase_times.time_step);
         let before = self.mass_and_momentum();
         let held = |e: &crate::energy::Energies| e.contact_elastic + e.cohesive_elastic;
-        let held_before = held(&self.energies);
+        let held_before = held(&self.ledger.account);
         self.apply_edits(&edits);
         let after = self.mass_and_momentum();
         let stiffness = self.contact.as_ref().map_or(0.0, |c| c.crack_stiffness());
@@ -378,7 +378,7 @@ impl Simulation {
         self.refresh_element_forces_of(&touched);
         self.preload_bonds(&preload);
         self.surface_forces(0.0);
-        self.energies.resurfacing += held_before - held(&self.energies);
+        self.ledger.account.resurfacing += held_before - held(&self.ledger.account);
         self.update_time_step_for(Some(&touched), true);
         // the rebuild's surface forces and stable step count as topology
         let pt = &mut self.phase_times;
@@ -574,7 +574,7 @@ impl Simulation {
     pub(crate) fn bond_forces(&mut self) {
         let Some(fr) = &mut self.fracture else { return };
         if fr.bonds.is_empty() {
-            self.energies.cohesive_elastic = 0.0;
+            self.ledger.account.cohesive_elastic = 0.0;
             return;
         }
         let (x, index_of) = (&self.nodes.x, &self.surface.index_of);
@@ -601,8 +601,8 @@ impl Simulation {
                 !responses[k - 1].broken
             });
         }
-        self.energies.fracture += dissipated;
-        self.energies.cohesive_elastic = elastic;
+        self.ledger.account.fracture += dissipated;
+        self.ledger.account.cohesive_elastic = elastic;
     }
 
     /// Adds the forces of the intact bonds, as the last [`Self::bond_forces`]
@@ -783,7 +783,7 @@ impl Simulation {
             }
         }
         self.rebuild_structure(&origins, Some(&touched_nodes));
-        self.energies.remeshing += before - kinetic(self);
+        self.ledger.account.remeshing += before - kinetic(self);
     }
 
     /// Gives node `id` a copy of constraint `b` (if any).
@@ -1078,16 +1078,16 @@ mod tests {
             let c = sim.contact.as_ref().unwrap();
             kept += c.partials.iter().map(|p| p.kept).sum::<u64>();
             let after = (c.states.clone(), c.corner_states.clone(), c.out.clone(), c.corner_out.clone());
-            let (contacts, stored) = (sim.contact_stats.contacts, sim.energies.contact_elastic);
+            let (contacts, stored) = (sim.contact_stats.contacts, sim.ledger.account.contact_elastic);
             // every node evaluated again at the same positions, without slip
             sim.refresh_forces();
             let c = sim.contact.as_ref().unwrap();
             assert_eq!(c.partials.iter().map(|p| p.kept).sum::<u64>(), 0);
             assert_eq!(sim.contact_stats.contacts, contacts, "after change {changes}");
             assert!(
-                close(sim.energies.contact_elastic, stored),
+                close(sim.ledger.account.contact_elastic, stored),
                 "{} J/m, {stored} J/m kept",
-                sim.energies.contact_elastic
+                sim.ledger.account.contact_elastic
             );
             for (fresh, kept) in [(&c.states, &after.0), (&c.corner_states, &after.1)] {
                 for (b, (s, k)) in fresh.iter().zip(kept).enumerate() {

@@ -18,6 +18,7 @@
 //! same for any number of threads.
 
 mod checkpoint;
+mod clock;
 mod contact;
 mod energy;
 mod error;
@@ -32,6 +33,7 @@ mod readout;
 mod renumber;
 mod setup;
 mod simulation;
+mod stable_step;
 mod topology;
 
 /// Steps between checks of the energy-growth watchdog

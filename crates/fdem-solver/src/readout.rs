@@ -18,23 +18,23 @@ use crate::{CHUNK, NONE};
 impl Simulation {
     /// Current simulated time (s).
     pub fn time(&self) -> f64 {
-        self.time
+        self.clock.time()
     }
 
     /// Steps taken.
     pub fn steps(&self) -> u64 {
-        self.step
+        self.clock.step()
     }
 
     /// The step the next advance uses (s).
     pub fn time_step(&self) -> f64 {
-        self.dt
+        self.clock.dt()
     }
 
     /// Critical step of the mesh at its last evaluation, before the safety
     /// factor (s): `min_e 2/ω_e`.
     pub fn critical_time_step(&self) -> f64 {
-        self.dt_critical
+        self.clock.dt_critical()
     }
 
     /// Number of nodes.
@@ -158,7 +158,7 @@ impl Simulation {
     /// without allocating: the energy watchdog evaluates it inside the
     /// time loop.
     pub(crate) fn whole_step_velocity(&self, i: usize) -> Vec2 {
-        let h = 0.5 * self.dt_prev;
+        let h = 0.5 * self.clock.dt_prev();
         let m = self.nodes.mass[i];
         let mut v = self.nodes.v[i];
         if m > 0.0 && h > 0.0 {
@@ -169,7 +169,7 @@ impl Simulation {
         let b = self.nodes.bc[i];
         if b != NO_BC {
             let c = &self.constraints[b as usize];
-            let a = c.amplitude.map_or(1.0, |k| self.amplitudes[k as usize].at(self.time));
+            let a = c.amplitude.map_or(1.0, |k| self.amplitudes[k as usize].at(self.clock.time()));
             for d in 0..2 {
                 if c.fixed[d] {
                     v[d] = c.value[d] * a;
@@ -186,7 +186,7 @@ impl Simulation {
     /// cannot change the velocities of the nodes that stay. Nodes without
     /// mass and prescribed components are left alone.
     pub(crate) fn keep_whole_step_velocities(&mut self, v_n: &[Vec2]) {
-        let h = 0.5 * self.dt_prev;
+        let h = 0.5 * self.clock.dt_prev();
         if h == 0.0 {
             return;
         }
@@ -199,7 +199,7 @@ impl Simulation {
     /// under the current forces is `vn` (see
     /// [`Self::keep_whole_step_velocities`]).
     pub(crate) fn set_whole_step_velocity(&mut self, i: usize, vn: Vec2) {
-        let h = 0.5 * self.dt_prev;
+        let h = 0.5 * self.clock.dt_prev();
         let m = self.nodes.mass[i];
         if h == 0.0 || m <= 0.0 {
             return;
@@ -445,7 +445,7 @@ impl Simulation {
     /// damping]`, the last five the pending second halves of the work of
     /// the last step (see [`Self::energies`]).
     pub(crate) fn node_energy_terms(&self, i: usize) -> [f64; 6] {
-        let h = 0.5 * self.dt_prev;
+        let h = 0.5 * self.clock.dt_prev();
         let alpha = self.settings.mass_damping;
         let g = self.gravity;
         let m = self.nodes.mass[i];
@@ -483,7 +483,7 @@ impl Simulation {
     /// [`Self::whole_step_velocity`] of the node.
     fn reaction_at(&self, i: usize, v: Vec2) -> Vec2 {
         let b = self.nodes.bc[i];
-        let h = 0.5 * self.dt_prev;
+        let h = 0.5 * self.clock.dt_prev();
         let m = self.nodes.mass[i];
         let mut r = [0.0; 2];
         if b == NO_BC || m <= 0.0 {
@@ -548,15 +548,16 @@ impl Simulation {
             sum[0] += kinetic_chunk;
         }
         let [kinetic, external, support, damping, contact, contact_damping] = sum;
+        let acc = &self.ledger.account;
         Energies {
             kinetic,
             elastic: self.elastic_energy(),
-            external_work: self.energies.external_work + external,
-            support_work: self.energies.support_work + support,
-            mass_damping: self.energies.mass_damping + damping,
-            contact_work: self.energies.contact_work + contact,
-            contact_damping: self.energies.contact_damping + contact_damping,
-            ..self.energies
+            external_work: acc.external_work + external,
+            support_work: acc.support_work + support,
+            mass_damping: acc.mass_damping + damping,
+            contact_work: acc.contact_work + contact,
+            contact_damping: acc.contact_damping + contact_damping,
+            ..*acc
         }
     }
 }

@@ -229,7 +229,7 @@ impl Simulation {
     pub(crate) fn renumber_if_due(&mut self, changed: bool) {
         let Some(f) = self.settings.renumber else { return };
         let grown = changed && (self.elems.conn.len() as f64) >= (1.0 + f) * self.layout.base as f64;
-        if !grown && self.step % crate::RENUMBER_INTERVAL != 0 {
+        if !grown && !self.clock.every(crate::RENUMBER_INTERVAL) {
             return;
         }
         let clock = std::time::Instant::now();

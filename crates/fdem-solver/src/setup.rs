@@ -9,15 +9,15 @@ use fdem_element::lumped_mass;
 use fdem_material::{Elastic, PlasticState};
 use fdem_mesh::{node_elements, validate};
 
+use crate::clock::Clock;
 use crate::contact::ContactModel;
-use crate::energy::{ElementPartial, Energies, NodePartial};
+use crate::energy::EnergyLedger;
 use crate::error::SetupError;
 use crate::loads::Constraint;
 use crate::model::{LawSpec, ModelSpec};
 use crate::passes::{self, Material, NO_BC};
 use crate::simulation::{check_settings, invalid, ContactStats, Elements, Nodes, PhaseTimes, Simulation};
 use crate::topology::{ancestor_pair, build_surface, resolve_pressures};
-use crate::CHUNK;
 
 impl Simulation {
     /// Builds a simulation from a model description on `threads` worker
@@ -273,15 +273,8 @@ impl Simulation {
             omega: vec![0.0; m],
             gravity: spec.gravity,
             settings: spec.settings,
-            time: 0.0,
-            step: 0,
-            dt: 0.0,
-            dt_prev: 0.0,
-            dt_critical: f64::INFINITY,
-            energies: Energies::default(),
-            held_seen: 0.0,
-            node_partials: vec![NodePartial::default(); n.div_ceil(CHUNK)],
-            elem_partials: vec![ElementPartial::default(); m.div_ceil(CHUNK)],
+            clock: Clock::default(),
+            ledger: EnergyLedger::new(n, m),
             contact_omega: Vec::new(),
             omega_carry: Default::default(),
             released: Vec::new(),
@@ -295,8 +288,8 @@ impl Simulation {
             sim.refresh_forces();
             sim.update_time_step();
         });
-        sim.energies.elastic_initial = sim.elastic_energy();
-        sim.energies.kinetic_initial = sim.kinetic_energy();
+        sim.ledger.account.elastic_initial = sim.elastic_energy();
+        sim.ledger.account.kinetic_initial = sim.kinetic_energy();
         Ok(sim)
     }
 }

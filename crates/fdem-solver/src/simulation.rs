@@ -1,18 +1,18 @@
 //! [`Simulation`]: the state and the time loop. Construction is in
-//! `setup.rs`, read-out of results in `readout.rs`.
+//! `setup.rs`, the stable step in `stable_step.rs`, read-out of results in
+//! `readout.rs`.
 
 use std::sync::Arc;
 use std::time::Instant;
-
-use rayon::prelude::*;
 
 use fdem_contact::Surface;
 use fdem_element::{ReferenceShape, Vec2};
 use fdem_material::PlasticState;
 use fdem_mesh::Csr;
 
+use crate::clock::Clock;
 use crate::contact::{AssemblyOut, ContactModel};
-use crate::energy::{ElementPartial, Energies, NodePartial};
+use crate::energy::EnergyLedger;
 use crate::error::{RunError, SetupError};
 use crate::loads::{Amplitude, Constraint, PressureLoad};
 use crate::model::Settings;
@@ -163,20 +163,11 @@ pub struct Simulation {
     pub(crate) omega: Vec<f64>,
     pub(crate) gravity: Vec2,
     pub(crate) settings: Settings,
-    pub(crate) time: f64,
-    pub(crate) step: u64,
-    /// `Δt^{n+½}`, the next position step (s).
-    pub(crate) dt: f64,
-    /// `Δt^{n−½}`, the last position step (s); zero before the first step.
-    pub(crate) dt_prev: f64,
-    /// Critical step before the safety factor (s).
-    pub(crate) dt_critical: f64,
-    pub(crate) energies: Energies,
-    /// Held energy (kinetic + elastic) at the last energy-growth check: the
-    /// watchdog's growth test and report.
-    pub(crate) held_seen: f64,
-    pub(crate) node_partials: Vec<NodePartial>,
-    pub(crate) elem_partials: Vec<ElementPartial>,
+    /// Time, step count and the step sizes around the current step.
+    pub(crate) clock: Clock,
+    /// The energy account, the passes' partial sums that feed it, and the
+    /// watchdog's last look.
+    pub(crate) ledger: EnergyLedger,
     /// Per boundary node: its frequency with its contact springs
     /// ([`Simulation::contact_node_frequency`]) at the last stable-step
     /// evaluation (scratch; sized by it).
@@ -221,7 +212,7 @@ impl Simulation {
     /// Holds the constrained components of the initial velocity at their
     /// prescribed values at `t = 0`.
     pub(crate) fn apply_prescribed_initial_velocity(&mut self) {
-        self.eval_amplitudes(self.time);
+        self.eval_amplitudes(self.clock.time());
         for c in &self.constraints {
             let amp = c.amplitude.map_or(1.0, |k| self.amplitude_values[k as usize]);
             for d in 0..2 {
@@ -241,7 +232,7 @@ impl Simulation {
     /// Recomputes element and surface forces at the current configuration
     /// without advancing the stress.
     pub(crate) fn refresh_forces(&mut self) {
-        let Simulation { nodes, elems, elem_partials, .. } = self;
+        let Simulation { nodes, elems, ledger, .. } = self;
         let inp = ElementInputs {
             x: &nodes.x,
             v: &nodes.v,
@@ -256,7 +247,7 @@ impl Simulation {
             dt: 0.0,
             plastic: !self.elastic_stage,
         };
-        passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, elem_partials);
+        passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, &mut ledger.elem_partials);
         self.surface_forces(0.0);
     }
 
@@ -303,11 +294,11 @@ impl Simulation {
     /// phase clocks.
     fn finish_surface_forces(&mut self, contact: Option<ContactOutcome>) {
         let clock = Instant::now();
-        self.eval_amplitudes(self.time);
+        self.eval_amplitudes(self.clock.time());
         passes::pressure_forces(&self.nodes.x, &self.pressure, &self.amplitude_values, &mut self.pressure_force);
         if let (Some(contact), Some(out)) = (&self.contact, contact) {
-            self.energies.friction += out.sum.friction;
-            self.energies.contact_elastic = out.sum.stored;
+            self.ledger.account.friction += out.sum.friction;
+            self.ledger.account.contact_elastic = out.sum.stored;
             self.contact_stats = ContactStats {
                 pairs_evaluated: contact.pairs_evaluated,
                 broad_phase_builds: contact.broad.builds,
@@ -337,302 +328,46 @@ impl Simulation {
         self.add_bond_forces();
     }
 
-    /// Re-evaluates the stable step (DESIGN §4.2): `s · min` over the
-    /// elements of `2/ω_e` and, with contact, over the boundary nodes of
-    /// `2/ω` with `ω` from [`contact_bound`] (`ω_c² = 4 k ℓ / m`: a node's
-    /// contact spring is the stiffness k times its tributary length ℓ;
-    /// two-pass contact doubles it, a free partner node doubles the relative
-    /// frequency²), and over the bonds; or the fixed step. With mass
-    /// scaling on, first raises the masses that would need a shorter step
-    /// than the target ([`Self::scale_masses`]).
-    pub fn update_time_step(&mut self) {
-        self.update_time_step_for(None, true);
-    }
-
-    /// [`Self::update_time_step`], re-evaluating only the listed elements'
-    /// frequencies (the others are unchanged since the last evaluation) when
-    /// `touched` is given: after a topology change. `rescale` allows mass
-    /// scaling (at set-up, settings changes and topology changes; the
-    /// periodic re-evaluation in the time loop never changes masses).
-    pub(crate) fn update_time_step_for(&mut self, touched: Option<&[u32]>, rescale: bool) {
-        let clock = Instant::now();
-        let mut crit = self.critical_step(touched);
-        if let (true, Some(target), None) = (rescale, self.settings.mass_scaling, self.settings.fixed_dt) {
-            if self.settings.safety * crit < target {
-                let changed = self.scale_masses(target / self.settings.safety);
-                if !changed.is_empty() {
-                    // only the changed elements' frequencies and their
-                    // nodes' masses moved: their nodes' contact
-                    // frequencies are worked out again, the others kept
-                    let mut moved: Vec<u32> = changed.iter().flat_map(|&e| self.elems.conn[e as usize]).collect();
-                    moved.sort_unstable();
-                    moved.dedup();
-                    crit = self.critical_step_of(Some(&changed), Some(&moved));
-                }
-            }
-        }
-        self.dt_critical = crit;
-        self.dt = self.settings.fixed_dt.unwrap_or(self.settings.safety * crit);
-        self.phase_times.time_step += clock.elapsed().as_secs_f64();
-    }
-
-    /// The critical step before the safety factor (s), updating the stored
-    /// element frequencies (all, or the listed elements') and the boundary
-    /// nodes' contact frequencies: every node's, or with `touched` (after
-    /// a topology change) those the change left stale.
-    fn critical_step(&mut self, touched: Option<&[u32]>) -> f64 {
-        if touched.is_none() {
-            return self.critical_step_of(None, None);
-        }
-        // after a topology change: the contact frequencies it left stale
-        // (the others were carried over, `carry_contact_omega`; when they
-        // could not be, the list is ignored and every node evaluated)
-        let stale = std::mem::take(&mut self.omega_carry.stale);
-        let crit = self.critical_step_of(touched, Some(&stale));
-        self.omega_carry.stale = stale;
-        crit
-    }
-
-    /// [`Self::critical_step`], re-evaluating the contact frequencies of
-    /// the boundary nodes among `nodes` (mesh ids) only, when given: those
-    /// whose mass or elements' frequencies changed since the last
-    /// evaluation (the others' are exactly what they were; the minimum is
-    /// the same as over a full evaluation). Mass scaling at an insertion
-    /// used to evaluate every boundary node three times.
-    fn critical_step_of(&mut self, touched: Option<&[u32]>, nodes: Option<&[u32]>) -> f64 {
-        let pool = Arc::clone(&self.pool);
-        let element_crit = pool.install(|| {
-            let Simulation { nodes, elems, omega, .. } = self;
-            let inp = ElementInputs {
-                x: &nodes.x,
-                v: &nodes.v,
-                conn: &elems.conn,
-                reference: &elems.reference,
-                material: &elems.material,
-                active: &elems.active,
-                materials: &self.materials,
-                node_elems: &self.node_elems,
-                insertion: self.fracture.is_some(),
-                beta: self.settings.stiffness_damping,
-                dt: 0.0,
-                plastic: !self.elastic_stage,
-            };
-            match touched {
-                None => passes::element_frequencies(&inp, &elems.mass_scale, omega),
-                Some(list) => {
-                    passes::element_frequencies_of(&inp, &elems.mass_scale, list, omega);
-                    passes::critical_from_frequencies(omega, self.settings.stiffness_damping)
-                }
-            }
-        });
-        // the contact nodes' frequencies read the elements' just updated;
-        // each node's critical step is `2/ω` (a minimum does not depend on
-        // the order, so the passes are parallel)
-        let mut crit = element_crit;
-        if let Some(contact) = &self.contact {
-            let nb = self.surface.nodes.len();
-            let mut wr = std::mem::take(&mut self.contact_omega);
-            let step = |w: &Option<f64>| w.map_or(f64::INFINITY, |w| 2.0 / w);
-            let least = match nodes {
-                Some(list) if wr.len() == nb => {
-                    for &v in list {
-                        let b = self.surface.index_of[v as usize];
-                        if b != crate::NONE {
-                            wr[b as usize] = self.contact_node_frequency(contact, b as usize);
-                        }
-                    }
-                    pool.install(|| {
-                        wr.par_iter().with_min_len(crate::CHUNK).map(step).reduce(|| f64::INFINITY, f64::min)
-                    })
-                }
-                _ => {
-                    wr.resize(nb, None);
-                    pool.install(|| {
-                        wr.par_iter_mut()
-                            .enumerate()
-                            .with_min_len(crate::CHUNK)
-                            .map(|(b, out)| {
-                                *out = self.contact_node_frequency(contact, b);
-                                step(out)
-                            })
-                            .reduce(|| f64::INFINITY, f64::min)
-                    })
-                }
-            };
-            self.contact_omega = wr;
-            crit = crit.min(least);
-        }
-        pool.install(|| {
-            if let Some(fr) = &self.fracture {
-                // a bond adds k ℓ (1/m_a + 1/m_b) to the frequency² of its
-                // nodes, on top of their elements and contact springs
-                let k_c = self.contact.as_ref().map_or(0.0, |c| c.max_stiffness);
-                // parallel, like the contact nodes' minimum above
-                let least = fr
-                    .bonds
-                    .par_iter()
-                    .with_min_len(crate::CHUNK)
-                    .filter_map(|bond| {
-                        let [a, b] = bond.nodes.map(|v| v as usize);
-                        let (ma, mb) = (self.nodes.mass[a], self.nodes.mass[b]);
-                        if ma <= 0.0 || mb <= 0.0 {
-                            return None;
-                        }
-                        let node_w2 = |v: usize, m: f64| {
-                            let we = self.node_frequency(v);
-                            let bi = self.surface.index_of[v];
-                            let wc2 = if bi == crate::NONE {
-                                0.0
-                            } else {
-                                4.0 * k_c * self.surface.tributary_max(bi as usize) / m
-                            };
-                            we * we + wc2
-                        };
-                        let wb2 = bond.stiffness * bond.length * (1.0 / ma + 1.0 / mb);
-                        let w = (node_w2(a, ma).max(node_w2(b, mb)) + wb2).sqrt();
-                        Some(2.0 / w)
-                    })
-                    .reduce(|| f64::INFINITY, f64::min);
-                crit = crit.min(least);
-            }
-            crit
-        })
-    }
-
-    /// The highest frequency among node `v`'s elements (rad/s).
-    fn node_frequency(&self, v: usize) -> f64 {
-        self.node_elems.row(v).iter().map(|&i| self.omega[(i / 3) as usize]).fold(0.0, f64::max)
-    }
-
-    /// Boundary node `b`'s frequency with its contact springs
-    /// ([`contact_bound`]); its critical step is `2 / ω`. `None` for a node
-    /// without mass. The contact dashpot does not shorten it: the node pass
-    /// applies it as the backward-Euler step of each pair on the predicted
-    /// velocities, where an explicit dashpot of damping ratio ξ cost the
-    /// factor `√(1 + ξ²) − ξ` (docs/contact.md).
-    pub(crate) fn contact_node_frequency(&self, contact: &ContactModel, b: usize) -> Option<f64> {
-        let node = self.surface.nodes[b] as usize;
-        let m = self.nodes.mass[node];
-        if m <= 0.0 {
-            return None;
-        }
-        let we = self.node_frequency(node);
-        // a node's contact spring is k ℓ (ℓ its tributary length); two-pass
-        // contact doubles it and a free partner node doubles the relative
-        // frequency²: 2kℓ (1/m1 + 1/m2) ≤ 4kℓ/m at the lighter node, so
-        // 4kℓ/m at each node covers all pairs
-        let wc2 = 4.0 * contact.max_stiffness * self.surface.tributary_max(b) / m;
-        Some(contact_bound(we, wc2, contact.may_rattle()))
-    }
-
-    /// Selective mass scaling (docs/mass_scaling.md): raises the density
-    /// factor of every element whose own frequency, or whose node's
-    /// frequency with its contact springs, would need a step shorter than
-    /// `target` (s, before the safety factor), by the factor that makes it
-    /// meet `target` exactly. An element needs `ω_e ≤ W` with `W = 2 /
-    /// √(T² + 2Tβ)` (the stiffness-damping-reduced bound solved for ω); a
-    /// contact node's frequency scales as `1/√s` when all its elements'
-    /// masses grow by `s`, so it needs the factor `(ω T / 2)²` on them.
-    /// Factors only grow. Once the run has started, a node whose mass
-    /// grows keeps its momentum (its whole-step velocity drops by
-    /// `m_old / m_new`), the reported work terms stay continuous, and the
-    /// kinetic energy that this inelastic accretion takes is booked as
-    /// `mass_scaling` in the energy account. Before the first step the
-    /// given velocities stay. Returns the elements changed, ascending.
-    pub(crate) fn scale_masses(&mut self, target: f64) -> Vec<u32> {
-        let beta = self.settings.stiffness_damping;
-        let w_max = 2.0 / (target * target + 2.0 * target * beta).sqrt();
-        // the elements that need more mass, in parallel (collected in
-        // order; the list is sorted below anyway)
-        let pool = Arc::clone(&self.pool);
-        let mut need: Vec<(u32, f64)> = pool.install(|| {
-            let (omega, active) = (&self.omega, &self.elems.active);
-            let mut need: Vec<(u32, f64)> = (0..omega.len())
-                .into_par_iter()
-                .with_min_len(crate::CHUNK)
-                .filter(|&e| active[e] && omega[e] > w_max)
-                .map(|e| (e as u32, (omega[e] / w_max) * (omega[e] / w_max)))
-                .collect();
-            if self.contact.is_some() {
-                // the frequencies the step was just found from
-                // (`update_time_step_for` calls this right after
-                // `critical_step`)
-                debug_assert_eq!(self.contact_omega.len(), self.surface.nodes.len());
-                let nodes: Vec<(usize, f64)> = self
-                    .contact_omega
-                    .par_iter()
-                    .enumerate()
-                    .with_min_len(crate::CHUNK)
-                    .filter_map(|(b, &w)| {
-                        let s = (w? * target / 2.0).powi(2);
-                        (s > 1.0).then_some((b, s))
-                    })
-                    .collect();
-                for (b, s) in nodes {
-                    let node = self.surface.nodes[b] as usize;
-                    need.extend(self.node_elems.row(node).iter().map(|&i| (i / 3, s)));
-                }
-            }
-            need
-        });
-        if need.is_empty() {
-            return Vec::new();
-        }
-        need.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
-        need.dedup_by_key(|p| p.0); // keeps the largest factor of each element
-        let started = self.dt_prev > 0.0;
-        for &(e, s) in &need {
-            self.elems.mass_scale[e as usize] *= s;
-        }
-        let mut nodes: Vec<u32> = need.iter().flat_map(|&(e, _)| self.elems.conn[e as usize]).collect();
-        nodes.sort_unstable();
-        nodes.dedup();
-        // only these nodes' masses change: their share of the account
-        // before and after is the change of the whole account
-        let terms = |sim: &Self| {
-            let mut sum = [0.0; 6];
-            for &v in &nodes {
-                let t = sim.node_energy_terms(v as usize);
-                (0..6).for_each(|k| sum[k] += t[k]);
-            }
-            sum
-        };
-        let before = if started { terms(self) } else { [0.0; 6] };
-        let old: Vec<(f64, Vec2)> =
-            nodes.iter().map(|&v| (self.nodes.mass[v as usize], self.whole_step_velocity(v as usize))).collect();
-        for &v in &nodes {
-            // in ascending element order, as `rebuild_structure` sums
-            let m = self.node_elems.row(v as usize).iter().fold(0.0, |m, &i| m + self.nodal_mass_of((i / 3) as usize));
-            self.nodes.mass[v as usize] = m;
-        }
-        if started {
-            for (&v, &(m_old, vn)) in nodes.iter().zip(&old) {
-                let k = m_old / self.nodes.mass[v as usize];
-                self.set_whole_step_velocity(v as usize, [vn[0] * k, vn[1] * k]);
-            }
-            let after = terms(self);
-            let acc = &mut self.energies;
-            acc.external_work += before[1] - after[1];
-            acc.support_work += before[2] - after[2];
-            acc.mass_damping += before[3] - after[3];
-            acc.contact_work += before[4] - after[4];
-            acc.contact_damping += before[5] - after[5];
-            acc.mass_scaling += before[0] - after[0];
-        }
-        need.into_iter().map(|(e, _)| e).collect()
-    }
-
-    /// Advances one step.
+    /// Advances one step in the order of ARCHITECTURE.md's "One step":
+    /// excavation stages due at `tⁿ`, the node pass, the element pass with
+    /// the surface forces, then the checks that follow a step (fracture,
+    /// stable step, renumbering).
     fn step_once(&mut self) -> Result<(), RunError> {
-        if !self.elastic_stage && self.next_stage < self.stages.len() && self.stages[self.next_stage].time <= self.time
+        if !self.elastic_stage
+            && self.next_stage < self.stages.len()
+            && self.stages[self.next_stage].time <= self.clock.time()
         {
             let clock = Instant::now();
             self.excavate_due();
             self.phase_times.topology += clock.elapsed().as_secs_f64();
         }
-        let dt = self.dt;
-        let dt_avg = 0.5 * (self.dt_prev + dt);
-        self.eval_amplitudes(self.time + 0.5 * dt);
+        let dt = self.node_pass()?;
+        self.element_and_surface_pass(dt)?;
+        if !self.elastic_stage && self.fracture.as_ref().is_some_and(|f| self.clock.every(f.interval as u64)) {
+            let clock = Instant::now();
+            let topology = self.phase_times.topology;
+            // a change of topology rebuilds forces (and contact) itself
+            let changed = self.fracture_check();
+            self.phase_times.fracture += clock.elapsed().as_secs_f64() - (self.phase_times.topology - topology);
+            if changed {
+                self.renumber_if_due(true);
+                return Ok(()); // rebuilt forces, contact and the stable step
+            }
+        }
+        if self.settings.fixed_dt.is_none() && self.clock.every(self.settings.dt_interval as u64) {
+            self.update_time_step_for(None, false);
+        }
+        self.renumber_if_due(false);
+        Ok(())
+    }
+
+    /// Step 1 of ARCHITECTURE.md's "One step", the node pass: `v^{n+½}`
+    /// and `x^{n+1}` from the forces at `xⁿ` (with contact dashpots in two
+    /// stages), the clock advanced, its work added to the ledger. Returns
+    /// the step taken (s).
+    fn node_pass(&mut self) -> Result<f64, RunError> {
+        let (dt, dt_avg) = (self.clock.dt(), self.clock.dt_avg());
+        self.eval_amplitudes(self.clock.mid_step());
         let clock = Instant::now();
         {
             let n = self.nodes.x.len();
@@ -644,7 +379,8 @@ impl Simulation {
             if self.dashpot_force.len() != self.contact_damped.len() {
                 self.dashpot_force.resize(self.contact_damped.len(), [0.0; 2]);
             }
-            let Simulation { nodes, elems, node_partials, pred_v, pred_f, dashpot_force, contact, .. } = self;
+            let Simulation { nodes, elems, ledger, pred_v, pred_f, dashpot_force, contact, .. } = self;
+            let node_partials = &mut ledger.node_partials;
             let inp = NodeInputs {
                 mass: &nodes.mass,
                 bnode: &self.surface.index_of,
@@ -662,7 +398,7 @@ impl Simulation {
                 release: &self.release_force,
                 dt_avg,
                 dt,
-                dt_prev: self.dt_prev,
+                dt_prev: self.clock.dt_prev(),
             };
             // with contact dashpots in two stages: the damped nodes'
             // predicted velocities, the dashpots on them, those nodes moved
@@ -683,29 +419,14 @@ impl Simulation {
             }
         }
         self.phase_times.nodes += clock.elapsed().as_secs_f64();
-        self.time += dt;
-        self.step += 1;
-        self.dt_prev = dt;
+        self.clock.advance();
         if !self.released.is_empty() || !self.release_force.is_empty() {
             self.update_release();
         }
-        let mut bad_node = None;
-        let mut max_speed2 = 0.0f64;
-        for p in &self.node_partials {
-            // a NaN is kept (the run stops below at the bad node anyway)
-            if p.max_speed2 > max_speed2 || p.max_speed2.is_nan() {
-                max_speed2 = p.max_speed2;
-            }
-            self.energies.external_work += p.external;
-            self.energies.contact_work += p.contact;
-            self.energies.contact_damping -= p.contact_damping;
-            self.energies.support_work += p.support;
-            self.energies.mass_damping += p.damping;
-            bad_node = bad_node.or(p.bad_node);
-        }
+        let (max_speed2, bad_node) = self.ledger.add_node_partials();
         if let Some((node, quantity)) = bad_node {
             let node = self.layout.node_id(node);
-            return Err(RunError::NonFinite { node, quantity, step: self.step, time: self.time });
+            return Err(RunError::NonFinite { node, quantity, step: self.clock.step(), time: self.clock.time() });
         }
         // how far the step can have moved any node: lets the broad phase
         // skip its scan of the boundary nodes while no node can be near
@@ -713,6 +434,13 @@ impl Simulation {
         if let Some(c) = self.contact.as_mut() {
             c.broad.note_motion(dt * max_speed2.sqrt());
         }
+        Ok(dt)
+    }
+
+    /// Steps 2 and 3 of "One step" at `x^{n+1}`: the element pass and the
+    /// surface forces (contact beside the element pass, pressure, bonds);
+    /// `dt` is the step just taken.
+    fn element_and_surface_pass(&mut self, dt: f64) -> Result<(), RunError> {
         // The element pass and the contact evaluation read the same
         // positions and velocities and write disjoint arrays, so they may
         // run in any order or side by side. The contact's narrow phase runs
@@ -725,14 +453,7 @@ impl Simulation {
         let searched = self.contact.as_mut().map(|c| search_contact(c, &self.surface, &self.nodes, dt));
         let contact = {
             let Simulation {
-                nodes,
-                elems,
-                elem_partials,
-                contact,
-                contact_force,
-                contact_damping_force,
-                contact_damped,
-                ..
+                nodes, elems, ledger, contact, contact_force, contact_damping_force, contact_damped, ..
             } = self;
             let inp = ElementInputs {
                 x: &nodes.x,
@@ -751,7 +472,13 @@ impl Simulation {
             let (elements, contact) = rayon::join(
                 || {
                     let clock = Instant::now();
-                    passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, elem_partials);
+                    passes::element_pass(
+                        &inp,
+                        &mut elems.stress,
+                        &mut elems.state,
+                        &mut elems.force,
+                        &mut ledger.elem_partials,
+                    );
                     clock.elapsed().as_secs_f64()
                 },
                 || {
@@ -764,17 +491,9 @@ impl Simulation {
             self.phase_times.elements += elements;
             contact
         };
-        let mut bad_element = None;
-        for p in &self.elem_partials {
-            self.energies.internal_work += p.internal;
-            self.energies.viscous_damping += p.viscous;
-            self.energies.plastic += p.plastic;
-            self.energies.fracture += p.fracture;
-            bad_element = bad_element.or(p.bad_element);
-        }
-        if let Some(element) = bad_element {
+        if let Some(element) = self.ledger.add_element_partials() {
             let element = self.layout.elem_id(element);
-            return Err(RunError::InvertedElement { element, step: self.step, time: self.time });
+            return Err(RunError::InvertedElement { element, step: self.clock.step(), time: self.clock.time() });
         }
         // Contact at x^{n+1} on the surfaces the step moved (evaluated
         // above, beside the element pass): this step's slip and friction,
@@ -786,21 +505,6 @@ impl Simulation {
         // every insertion step (measured: 1.5×10⁶ J in 300 steps of the
         // block-caving case).
         self.finish_surface_forces(contact);
-        if !self.elastic_stage && self.fracture.as_ref().is_some_and(|f| self.step % f.interval as u64 == 0) {
-            let clock = Instant::now();
-            let topology = self.phase_times.topology;
-            // a change of topology rebuilds forces (and contact) itself
-            let changed = self.fracture_check();
-            self.phase_times.fracture += clock.elapsed().as_secs_f64() - (self.phase_times.topology - topology);
-            if changed {
-                self.renumber_if_due(true);
-                return Ok(()); // rebuilt forces, contact and the stable step
-            }
-        }
-        if self.settings.fixed_dt.is_none() && self.step % self.settings.dt_interval as u64 == 0 {
-            self.update_time_step_for(None, false);
-        }
-        self.renumber_if_due(false);
         Ok(())
     }
 
@@ -809,41 +513,11 @@ impl Simulation {
     fn step_watched(&mut self) -> Result<(), RunError> {
         self.step_once()?;
         let limit = self.settings.energy_growth;
-        if limit > 0.0 && self.step % crate::ENERGY_CHECK_INTERVAL == 0 {
-            // Energy created is `−residual`, with the whole-step kinetic
-            // energy. That of a mode with `ω Δt / 2 = s` differs from the
-            // energy the central-difference scheme conserves by up to the
-            // factor 1 / (1 − s²) (5.3 at s = 0.9): a stable run with its
-            // energy in the highest modes shows several percent "created".
-            // The scheme conserves `½ m v^{n−½}·v^{n+½} + E_el` exactly for
-            // linear undamped motion; its kinetic part is the whole-step
-            // one less `½ m |vⁿ − v^{n−½}|²` (`kinetic_lag`). Energy
-            // created in that measure (a contact switched on and off
-            // out of phase, a wrong force) stops the run. That measure
-            // stays constant through a linear instability, though (it is
-            // indefinite there), so growth stops the run too: the held
-            // energy grown at least sixteenfold since the last check while
-            // the whole-step balance shows the energy created, which a
-            // bounded oscillation cannot do below s = 0.96. Until
-            // 2026-11-25 only the second rule stopped runs, and two bars
-            // whose contact tripled their energy in a few hundred steps
-            // ran on with a warning (issue 32).
+        if limit > 0.0 && self.clock.every(crate::ENERGY_CHECK_INTERVAL) {
+            // (the rules and why: `EnergyLedger::watch`)
             let e = self.energies();
-            let held = e.kinetic + e.elastic;
-            let before = std::mem::replace(&mut self.held_seen, held);
-            let created = -e.residual();
-            let largest = e.largest_term();
-            let growing = before > 0.0 && held >= 16.0 * before;
-            let conserved_created = created - self.kinetic_lag();
-            if conserved_created > limit * largest || (growing && created > limit * largest) {
-                return Err(RunError::EnergyGrowth {
-                    created,
-                    largest,
-                    held: [before, held],
-                    step: self.step,
-                    time: self.time,
-                });
-            }
+            let lag = self.kinetic_lag();
+            self.ledger.watch(&e, lag, limit, &self.clock)?;
         }
         Ok(())
     }
@@ -867,7 +541,7 @@ impl Simulation {
         let pool = Arc::clone(&self.pool);
         pool.install(|| {
             let mut taken = 0;
-            while self.time < until && taken < max_steps {
+            while self.clock.time() < until && taken < max_steps {
                 self.step_watched()?;
                 taken += 1;
             }
@@ -1009,48 +683,13 @@ fn assemble_contact(
     ContactOutcome { sum, broad_secs, narrow_secs: search_secs + clock.elapsed().as_secs_f64() }
 }
 
-/// The frequency (rad/s) that sets the stable step `s · 2/ω` of a boundary
-/// node with element frequency `we` and contact frequency² `wc2`
-/// (`4kℓ/m`, [`Simulation::contact_node_frequency`]): `ω = √(ω_e² + ω_c²)`,
-/// i.e. `Δt ≤ s · 2/√(ω_e² + ω_c²)` for stability of the node with its
-/// springs (DESIGN §4.2), and, where a contact may `rattle` (an interface
-/// law with a dashpot weaker than [`RATTLE_DAMPING`](crate::contact::RATTLE_DAMPING)),
-/// `ω = max(√(ω_e² + ω_c²), 2 ω_c)`: also `ω_c Δt ≤ s` for the accuracy of
-/// contact onsets.
-///
-/// Why the second bound: a contact is switched on at the first step that
-/// finds the node inside, a fraction `τ/Δt` of a step after it crossed the
-/// facet, and the central-difference scheme's conserved energy then jumps
-/// by `−½ k v² τ (Δt − τ)`: up to `(ω_c Δt)²/4` of the node's kinetic
-/// energy at every onset, and back by a different amount when it leaves.
-/// A spring much stiffer than the node's elements is resolved in one or
-/// two steps at the stability bound, the pressed face nodes rattle, and the
-/// onsets of every bounce add up: two bars meeting at 1 m/s with a node
-/// spring of 20 E (`penalty_factor` 20), undamped, left with 3.2 times the
-/// energy they brought at `ω_c Δt = 1.6`; at 1.0 with 0.9% more, at 0.8
-/// with 0.06% (`test_undamped_impact_keeps_its_energy_at_the_default_step`).
-/// A dashpot of `ξ ≥ 0.05` stops the rattle (the same bars lost 0.0–0.2%
-/// at `ω_c Δt = 1.6`), so damped contacts keep the longer step: where the
-/// elements are as stiff as the contact (the default penalty `E/h̄`) the
-/// second bound costs a factor up to `√2` in step (1.48 times the steps of
-/// the paper-scale caving run, whose laws all have `ξ = 0.5`).
-#[inline]
-pub(crate) fn contact_bound(we: f64, wc2: f64, rattle: bool) -> f64 {
-    let stable = (we * we + wc2).sqrt();
-    if rattle {
-        stable.max(2.0 * wc2.sqrt())
-    } else {
-        stable
-    }
-}
-
 impl Simulation {
     /// Sums the loads of the gradual excavations at the current time into
     /// [`Self::release_force`] and drops those that have fallen to zero
     /// (the array is emptied once none is left, so a run without them pays
     /// nothing).
     pub(crate) fn update_release(&mut self) {
-        let t = self.time;
+        let t = self.clock.time();
         self.released.retain(|r| r.share(t) > 0.0);
         if self.released.is_empty() {
             self.release_force.clear();

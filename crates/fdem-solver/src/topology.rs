@@ -270,8 +270,7 @@ impl crate::simulation::Simulation {
             self.contact_damped.resize(nb, 0);
         }
         self.surface = surface;
-        self.node_partials.resize(n.div_ceil(crate::CHUNK), Default::default());
-        self.elem_partials.resize(m.div_ceil(crate::CHUNK), Default::default());
+        self.ledger.size_partials(n, m);
         self.omega.resize(m, 0.0);
         self.elems.force.resize(3 * m, [0.0; 2]);
     }
