@@ -180,19 +180,22 @@ def test_the_lineage_survives_renumbering_and_checkpoints(tmp_path):
     assert np.array_equal(sim.positions(), back.positions()) and sim.energies() == back.energies()
 
 
-def without_lineage(path, out, parents: np.ndarray, bonds: int) -> None:
-    """The checkpoint at ``path`` as format 6 wrote it, without the lineage
-    and bond-offset blocks at the end of its state (postcard: the count and
-    each parent as varints; the count of the ``bonds`` and two f64 each),
-    resealed, at ``out``."""
+def without_lineage(path, out, parents: np.ndarray, bonds: int, materials: int) -> None:
+    """The checkpoint at ``path`` as format 6 wrote it, without the lineage,
+    bond-offset and bond-law blocks at the end of its state (postcard: the
+    count and each parent as varints; the count of the ``bonds`` and two
+    f64 each, the local damping and two empty lists; the count of the
+    bonds and each one's mixed-mode law (a tag and six f64), the count of
+    the ``materials`` and one f64 each), resealed, at ``out``."""
     import struct
     import zlib
 
     b = Path(path).read_bytes()
-    assert b[:8] == b"FDEMCKPT" and struct.unpack_from("<I", b, 8)[0] == 8
+    assert b[:8] == b"FDEMCKPT" and struct.unpack_from("<I", b, 8)[0] == 9
     s_len, u_len = struct.unpack_from("<QQ", b, 16)
     varint = lambda n: max(1, -(-int(n).bit_length() // 7))  # noqa: E731
     block = varint(len(parents)) + sum(varint(p) for p in parents) + varint(bonds) + 16 * bonds + 8 + 2
+    block += varint(bonds) + 49 * bonds + varint(materials) + 8 * materials
     state, user = b[40 : 40 + s_len - block], b[40 + s_len :]
     head = bytearray(b[:40])
     struct.pack_into("<I", head, 8, 6)
@@ -212,7 +215,7 @@ def test_a_checkpoint_without_lineage_gets_it_back_from_the_model(tmp_path):
     origins = sim.element_origins()
     assert sim.n_elements > model.mesh.n_elements and sim.renumberings > 0
     path = sim.save_checkpoint(tmp_path / "v7.ckpt")
-    without_lineage(path, tmp_path / "v6.ckpt", sim.element_parents(), len(sim.bonds()["nodes"]))
+    without_lineage(path, tmp_path / "v6.ckpt", sim.element_parents(), len(sim.bonds()["nodes"]), len(model._materials))
     raw, _ = fdem._core.Simulation.read_checkpoint(str(tmp_path / "v6.ckpt"), 1)
     assert np.array_equal(raw.element_parents(), np.arange(sim.n_elements))
     back = fdem.Simulation.from_checkpoint(tmp_path / "v6.ckpt", model, threads=1)
