@@ -17,6 +17,7 @@
 //! first bad entity) are reduced in chunk order, so a run is bit-for-bit the
 //! same for any number of threads.
 
+mod bonds;
 mod checkpoint;
 mod clock;
 mod contact;
