@@ -93,6 +93,14 @@ pub struct MixedMode {
     pub damage: f64,
 }
 
+/// Opening `δ_n = d·n` and slip `δ_s = d·t`, `t = (−n_y, n_x)` (m), of
+/// the opening `d` across the crack of normal `m.normal`.
+#[inline]
+fn components(m: &MixedMode, d: Vec2) -> (f64, f64) {
+    let n = m.normal;
+    (d[0] * n[0] + d[1] * n[1], d[1] * n[0] - d[0] * n[1])
+}
+
 /// The linear envelope of the current mode, in the mixed-mode opening
 /// `δ_m` (m): damage onset `δ_m⁰` and final opening `δ_m^f`.
 #[derive(Clone, Copy, Debug)]
@@ -209,8 +217,9 @@ impl Bond {
             if delta > self.max_opening {
                 self.max_opening = delta;
             }
-            let (dn, ds, env) = self.mode_of(&m, d);
-            let now = env.damage((dn.max(0.0) * dn.max(0.0) + ds * ds).sqrt());
+            let (dn, ds) = components(&m, d);
+            let (dm, env) = self.mixed_envelope(&m, dn, ds);
+            let now = env.damage(dm);
             // most bonds most steps hold or unload: no damage grows and
             // nothing is dissipated (what the difference below gives then)
             let mut dissipated = 0.0;
@@ -247,7 +256,7 @@ impl Bond {
         let d = self.opening(xa, xb);
         match &self.mode {
             Some(m) => {
-                let (dn, ds, _) = self.mode_of(m, d);
+                let (dn, ds) = components(m, d);
                 self.mixed_force(m, dn, ds).0
             }
             None => self.spring_force(self.current_secant(), d),
@@ -267,29 +276,24 @@ impl Bond {
     /// without damage starting (`δ₀ / |o|` for the isotropic law; the onset
     /// of `o`'s mode over its mixed-mode opening for the mixed one).
     pub fn elastic_scale(&self, o: Vec2) -> f64 {
-        let size = (o[0] * o[0] + o[1] * o[1]).sqrt();
-        let reach = match &self.mode {
+        match &self.mode {
             Some(m) => {
-                let (dn, ds, env) = self.mode_of(&MixedMode { damage: 0.0, ..*m }, o);
-                let dm = (dn.max(0.0) * dn.max(0.0) + ds * ds).sqrt();
+                let (dn, ds) = components(m, o);
+                let (dm, env) = self.mixed_envelope(m, dn, ds);
                 if dm <= env.onset {
-                    return 1.0;
+                    1.0
+                } else {
+                    env.onset / dm
                 }
-                env.onset / dm
             }
-            None => self.elastic_limit() / size,
-        };
-        reach.min(1.0)
+            None => (self.elastic_limit() / (o[0] * o[0] + o[1] * o[1]).sqrt()).min(1.0),
+        }
     }
 
-    /// Opening `δ_n`, slip `δ_s` (m) and the current mode's envelope at the
-    /// opening `d` (module notes).
+    /// The mixed-mode opening `δ_m = √(⟨δ_n⟩² + δ_s²)` (m) at opening `dn`
+    /// and slip `ds` (m), and the envelope of their mode (module notes).
     #[inline]
-    fn mode_of(&self, m: &MixedMode, d: Vec2) -> (f64, f64, Envelope) {
-        let n = m.normal;
-        let dn = d[0] * n[0] + d[1] * n[1];
-        // t = (−n_y, n_x)
-        let ds = d[1] * n[0] - d[0] * n[1];
+    fn mixed_envelope(&self, m: &MixedMode, dn: f64, ds: f64) -> (f64, Envelope) {
         let k = self.stiffness;
         let open = dn.max(0.0);
         let t0 = self.strength;
@@ -302,7 +306,7 @@ impl Bond {
         let onset = 1.0 / (k * ((c / t0).powi(2) + (s / s0).powi(2)).sqrt());
         let g = 0.5 * t0 * self.final_opening * c * c + m.shear_energy * s * s;
         let last = (2.0 * g / (k * onset)).max(onset * (1.0 + 1e-9));
-        (dn, ds, Envelope { onset, last })
+        (dm, Envelope { onset, last })
     }
 
     /// Force on node `b` and elastic energy of the mixed-mode law at
