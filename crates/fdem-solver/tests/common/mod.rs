@@ -1,4 +1,7 @@
 //! Meshes and specs shared by the solver's integration tests.
+#![allow(dead_code)] // each test binary uses part of them
+
+pub mod impact;
 
 use fdem_solver::{ContactSpec, InterfaceSpec};
 
