@@ -19,7 +19,7 @@
 
 use parry2d_f64::bounding_volume::Aabb;
 use parry2d_f64::math::Vector;
-use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
+use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
 use rayon::prelude::*;
 
 use fdem_mesh::Csr;
@@ -37,6 +37,9 @@ pub struct BroadPhase {
     /// Box enlargement (m).
     pub margin: f64,
     bvh: Bvh,
+    /// Scratch of the tree's periodic rebuild, kept so that the rebuild
+    /// reuses its buffers (and the tree's) instead of allocating.
+    workspace: BvhWorkspace,
     boxes: Vec<Aabb>,
     /// Positions of the boundary nodes at the last build.
     built_at: Vec<Vec2>,
@@ -76,6 +79,7 @@ impl BroadPhase {
         Self {
             margin,
             bvh: Bvh::new(),
+            workspace: BvhWorkspace::default(),
             boxes: Vec::new(),
             built_at: Vec::new(),
             candidates: Csr::default(),
@@ -188,7 +192,7 @@ impl BroadPhase {
                 self.facet_of_key[f.key as usize] = i as u32;
             }
         }
-        if self.fresh || self.refits >= REFITS_PER_REBUILD || nf < 3 {
+        if self.fresh || nf < 3 {
             self.bvh = if nf < 3 {
                 let mut bvh = Bvh::new();
                 for (f, bx) in surface.facets.iter().zip(&self.boxes) {
@@ -214,8 +218,16 @@ impl BroadPhase {
             for (f, bx) in surface.facets.iter().zip(&self.boxes) {
                 self.bvh.insert_or_update_partially(*bx, f.key, 0.0);
             }
-            self.bvh.refit_without_opt();
-            self.refits += 1;
+            if self.refits + 1 >= REFITS_PER_REBUILD {
+                // the same leaves in a new tree, in the buffers of the old
+                // (the candidate lists are sorted by facet, so they do not
+                // depend on the tree's shape)
+                self.bvh.rebuild(&mut self.workspace, BvhBuildStrategy::Binned);
+                self.refits = 0;
+            } else {
+                self.bvh.refit_without_opt();
+                self.refits += 1;
+            }
         }
         if self.fresh || self.changed {
             self.keys.clear();
@@ -544,6 +556,7 @@ impl<'de> Deserialize<'de> for BroadPhase {
         Ok(Self {
             margin: s.margin,
             bvh,
+            workspace: BvhWorkspace::default(),
             boxes,
             built_at: s.built_at,
             candidates: s.candidates,
