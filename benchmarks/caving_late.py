@@ -3,7 +3,9 @@ of thousands of contacts and a crack insertion check every 6 steps
 (`CavingCase.check_every`; 10 before 2026-11-24 evening).
 Restarts from a checkpoint that `examples/block_caving.py` wrote at the end
 of its run (``<out>/caving.ckpt``), steps it at each thread count and
-reports element-updates per second and the share of each phase (the
+reports element-updates per second, the parallel efficiency E(n) against
+the first thread count listed ((rate at n / rate at the first) × (first / n)),
+and the share of each phase (the
 contact's assembly runs beside the element pass, so on more than one
 thread their shares overlap and may add up to more than 100%); checks that
 every thread count ends on the same bits.
@@ -60,6 +62,7 @@ def main() -> None:
     built = time.perf_counter() - t0
     print(f"fdem {fdem.__version__}, {platform.machine()}, {os.cpu_count()} cores; model built in {built:.1f} s")
     ends = []
+    first_rate = None
     for threads in args.threads:
         sim = fdem.Simulation.from_checkpoint(args.checkpoint, model, threads=threads)
         if args.renumber:
@@ -77,9 +80,13 @@ def main() -> None:
         p1 = sim.phase_times()
         updates = 0.5 * (e0 + sim.n_elements) * (sim.steps - s0)
         shares = ", ".join(f"{k} {100 * (p1[k] - p0[k]) / wall:.0f}%" for k in p1 if p1[k] - p0[k] > 0.005 * wall)
+        rate = updates / wall
+        if first_rate is None:
+            first_rate = rate
+        efficiency = (rate / first_rate) * (args.threads[0] / threads)
         print(
-            f"{threads} thread(s): {args.steps} steps in {wall:.2f} s, {updates / wall:.3e} element-updates/s, "
-            f"{sim.insertions - c0} cracks inserted; {shares}"
+            f"{threads} thread(s): {args.steps} steps in {wall:.2f} s, {rate:.3e} element-updates/s, "
+            f"E(n) {efficiency:.2f}, {sim.insertions - c0} cracks inserted; {shares}"
         )
         ends.append(sim.positions())
     same = all(np.array_equal(ends[0], e) for e in ends[1:])
