@@ -1,5 +1,11 @@
 """Running a model: :class:`Simulation` drives the native time loop and
-writes results."""
+writes results.
+
+Over 800 lines because it is one class, the user's whole handle on a run:
+stepping, checkpoints, energies, readouts and output are sixty short,
+documented methods of it, each a thin call into the kernel; split by topic
+they would still be one class's methods, only harder to find.
+"""
 
 from __future__ import annotations
 
