@@ -74,6 +74,9 @@ pub(crate) struct ContactModel {
     dashpot_ids: Vec<u32>,
     #[serde(skip)]
     dashpot_links: Vec<narrow::DashpotLink>,
+    /// Scratch of the chunked assemblies (contacts and dashpots).
+    #[serde(skip)]
+    scatter: narrow::Scatter,
     /// Set by a topology change that named the nodes it touched
     /// ([`ContactModel::adopt`]) for the evaluation that follows it: per
     /// boundary node whether its contacts were carried over as they were,
@@ -211,6 +214,7 @@ impl ContactModel {
             resumed: Vec::new(),
             dashpot_ids: Vec::new(),
             dashpot_links: Vec::new(),
+            scatter: Default::default(),
             kept: Vec::new(),
             changed: Vec::new(),
             pairs_evaluated: 0,
@@ -564,7 +568,8 @@ impl ContactModel {
         }
     }
 
-    /// The assembly (serial, in boundary-node order) after
+    /// The assembly (in parallel over chunks of boundary nodes, in a fixed
+    /// order: [`narrow::Scatter`]) after
     /// [`ContactModel::search`]: the forces into `forces` (per boundary
     /// node), their dashpot parts into `damping`, and how many dashpots act
     /// on each boundary node into `damped` ([`narrow::assemble`]); returns
@@ -588,7 +593,7 @@ impl ContactModel {
     pub fn reassemble(&mut self, out: AssemblyOut<'_>) {
         let AssemblyOut { forces, damping, damped } = out;
         let contacts = [&self.out[..], &self.corner_out[..]];
-        narrow::assemble(contacts, &self.busy, forces, damping, damped, &mut self.dashpot_ids);
+        narrow::assemble(contacts, &self.busy, forces, damping, damped, &mut self.dashpot_ids, &mut self.scatter);
     }
 
     /// Whether the last assembly found a contact with a dashpot.
@@ -607,6 +612,6 @@ impl ContactModel {
         let links = &mut self.dashpot_links;
         links.resize(self.dashpot_ids.len(), Default::default());
         narrow::dashpot_forces(contacts, &self.dashpot_ids, nodes, damped, mass, v, h, links);
-        narrow::assemble_dashpots(links, out);
+        narrow::assemble_dashpots(links, out, &mut self.scatter);
     }
 }

@@ -1,22 +1,69 @@
-//! The sequential assembly of the contact forces: each contact's force
-//! spread to its node and to the facet's two ends (eq. 2.7), node by node
-//! in boundary-node order, so that the sums do not depend on the thread
-//! count; and the list of the contacts with a dashpot, for the node pass.
+//! The assembly of the contact forces: each contact's force spread to its
+//! node and to the facet's two ends (eq. 2.7), in parallel over fixed
+//! chunks of boundary nodes and in a fixed order, so that the sums do not
+//! depend on the thread count ([`Scatter`]); and the list of the contacts
+//! with a dashpot, for the node pass.
+
+use rayon::prelude::*;
 
 use super::NodeContact;
-use crate::{Vec2, NONE};
+use crate::{Vec2, CHUNK, NONE};
+
+/// Scratch of the chunked scatters ([`assemble`], and the dashpots'
+/// [`assemble_dashpots`](super::assemble_dashpots)): per chunk of
+/// [`CHUNK`] boundary nodes, what its contacts add to boundary nodes of
+/// other chunks, and its contacts with a dashpot. Kept between steps, so
+/// that the lists keep their capacity (no allocation once warm).
+///
+/// The order of the sums, the same on any thread count: a boundary node
+/// first gets, in contact order, what the contacts of its own chunk add
+/// (its own contacts and those whose facet it ends), then what each other
+/// chunk's contacts add, chunk by chunk, each in contact order. With every
+/// node in one chunk (fewer than [`CHUNK`] boundary nodes) that is contact
+/// order, the order of the serial assembly this replaced.
+#[derive(Debug, Default)]
+pub struct Scatter {
+    /// Per chunk: (target boundary node, force, dashpot part of it).
+    cross: Vec<Vec<(u32, Vec2, Vec2)>>,
+    /// Per chunk: dashpot counts on boundary nodes of other chunks.
+    cross_damped: Vec<Vec<u32>>,
+    /// Per chunk: its contacts with a dashpot (`2b + k`).
+    dashpots: Vec<Vec<u32>>,
+    /// Per chunk: (target boundary node, dashpot force) of the dashpots'
+    /// scatter, to boundary nodes of other chunks.
+    cross_dashpot: Vec<Vec<(u32, Vec2)>>,
+}
+
+impl Scatter {
+    fn size(&mut self, chunks: usize) {
+        self.cross.resize_with(chunks, Vec::new);
+        self.cross_damped.resize_with(chunks, Vec::new);
+        self.dashpots.resize_with(chunks, Vec::new);
+        self.cross_dashpot.resize_with(chunks, Vec::new);
+    }
+}
+
+/// `f` on the node, `−(1−ξ) f` and `−ξ f` on the facet's ends (eq. 2.7),
+/// as (boundary node, force) pairs for `[b, fa, fb]`; `x + −(w f)` is
+/// `x − w f` to the bit.
+#[inline(always)]
+fn shares([b, fa, fb]: [usize; 3], xi: f64, f: Vec2) -> [(usize, Vec2); 3] {
+    let neg = |w: f64| [-(w * f[0]), -(w * f[1])];
+    [(b, f), (fa, neg(1.0 - xi)), (fb, neg(xi))]
+}
 
 /// Adds every contact force into `forces`, and the dashpot parts also into
-/// `damping` (one entry per boundary node, zeroed first), node by node in
-/// boundary-node order (a node's first contact, then its corner's second):
-/// deterministic. Counts in `damped` the dashpots that act on each boundary
-/// node (as the node, or as a facet end with a non-zero weight), and lists
-/// the contacts with a dashpot in `dashpots` (as `2b + k`, `k` = 0 for the
-/// first contact, 1 for the second), in the same order. Reads the contacts
-/// of the busy nodes only (`busy` as left by [`evaluate`]: a contact
-/// implies a memory).
+/// `damping` (one entry per boundary node, zeroed first), in the order of
+/// [`Scatter`], in parallel over chunks of boundary nodes: deterministic.
+/// Counts in `damped` the dashpots that act on each boundary node (as the
+/// node, or as a facet end with a non-zero weight), and lists the contacts
+/// with a dashpot in `dashpots` (as `2b + k`, `k` = 0 for the first
+/// contact, 1 for the second) in contact order. Reads the contacts of the
+/// busy nodes only (`busy` as left by [`evaluate`]: a contact implies a
+/// memory).
 ///
 /// [`evaluate`]: super::evaluate
+#[allow(clippy::too_many_arguments)]
 pub fn assemble(
     contacts: [&[NodeContact]; 2],
     busy: &[u8],
@@ -24,44 +71,124 @@ pub fn assemble(
     damping: &mut [Vec2],
     damped: &mut [u16],
     dashpots: &mut Vec<u32>,
+    scratch: &mut Scatter,
 ) {
-    forces.iter_mut().for_each(|f| *f = [0.0; 2]);
-    damping.iter_mut().for_each(|f| *f = [0.0; 2]);
-    damped.iter_mut().for_each(|d| *d = 0);
-    dashpots.clear();
-    for (b, &flags) in busy.iter().enumerate() {
-        if flags == 0 {
-            continue;
-        }
-        for k in 0..2 {
-            let c = &contacts[k][b];
-            if flags & (1 << k) == 0 || c.facet == NONE {
-                continue;
-            }
-            let [fa, fb] = c.ends.map(|i| i as usize);
-            spread(forces, [b, fa, fb], c.xi, c.force());
-            spread(damping, [b, fa, fb], c.xi, c.damping_force());
-            if c.dashpot.coefficient > 0.0 {
-                dashpots.push(2 * b as u32 + k as u32);
-                for (node, w) in [(b, 1.0), (fa, 1.0 - c.xi), (fb, c.xi)] {
-                    if w > 0.0 {
-                        damped[node] = damped[node].saturating_add(1);
+    let nb = busy.len();
+    scratch.size(nb.div_ceil(CHUNK));
+    forces[nb..].iter_mut().for_each(|f| *f = [0.0; 2]);
+    damping[nb..].iter_mut().for_each(|f| *f = [0.0; 2]);
+    let Scatter { cross, cross_damped, dashpots: chunk_dashpots, .. } = scratch;
+    forces[..nb]
+        .par_chunks_mut(CHUNK)
+        .zip(damping[..nb].par_chunks_mut(CHUNK))
+        .zip(damped[..nb].par_chunks_mut(CHUNK))
+        .zip(cross.par_iter_mut().zip(cross_damped.par_iter_mut()).zip(chunk_dashpots.par_iter_mut()))
+        .enumerate()
+        .for_each(|(c, (((fc, dc), nc), ((cross, cross_damped), ids)))| {
+            fc.iter_mut().for_each(|f| *f = [0.0; 2]);
+            dc.iter_mut().for_each(|f| *f = [0.0; 2]);
+            nc.iter_mut().for_each(|d| *d = 0);
+            cross.clear();
+            cross_damped.clear();
+            ids.clear();
+            let base = c * CHUNK;
+            let len = fc.len();
+            let local = |t: usize| t.wrapping_sub(base) < len;
+            for j in 0..len {
+                let b = base + j;
+                let flags = busy[b];
+                if flags == 0 {
+                    continue;
+                }
+                for k in 0..2 {
+                    let ct = &contacts[k][b];
+                    if flags & (1 << k) == 0 || ct.facet == NONE {
+                        continue;
+                    }
+                    let [fa, fb] = ct.ends.map(|i| i as usize);
+                    let fs = shares([b, fa, fb], ct.xi, ct.force());
+                    let ds = shares([b, fa, fb], ct.xi, ct.damping_force());
+                    for ((t, wf), (_, wd)) in fs.into_iter().zip(ds) {
+                        if local(t) {
+                            let i = t - base;
+                            for e in 0..2 {
+                                fc[i][e] += wf[e];
+                                dc[i][e] += wd[e];
+                            }
+                        } else {
+                            cross.push((t as u32, wf, wd));
+                        }
+                    }
+                    if ct.dashpot.coefficient > 0.0 {
+                        ids.push(2 * b as u32 + k as u32);
+                        for (t, w) in [(b, 1.0), (fa, 1.0 - ct.xi), (fb, ct.xi)] {
+                            if w > 0.0 {
+                                if local(t) {
+                                    nc[t - base] = nc[t - base].saturating_add(1);
+                                } else {
+                                    cross_damped.push(t as u32);
+                                }
+                            }
+                        }
                     }
                 }
             }
+        });
+    // what crosses chunks, chunk by chunk in order
+    for list in cross.iter() {
+        for &(t, wf, wd) in list {
+            let t = t as usize;
+            for e in 0..2 {
+                forces[t][e] += wf[e];
+                damping[t][e] += wd[e];
+            }
         }
+    }
+    for list in cross_damped.iter() {
+        for &t in list {
+            damped[t as usize] = damped[t as usize].saturating_add(1);
+        }
+    }
+    dashpots.clear();
+    for ids in chunk_dashpots.iter() {
+        dashpots.extend_from_slice(ids);
     }
 }
 
-/// Adds the force `f` of a contact of node `b` on the facet `[fa, fb]` at
-/// `ξ` into `out` (by boundary node): `f` on the node, `−(1−ξ) f` and `−ξ f`
-/// on the facet's ends (eq. 2.7).
-#[inline(always)]
-pub(super) fn spread(out: &mut [Vec2], [b, fa, fb]: [usize; 3], xi: f64, f: Vec2) {
-    for d in 0..2 {
-        out[b][d] += f[d];
-        out[fa][d] -= (1.0 - xi) * f[d];
-        out[fb][d] -= xi * f[d];
+/// Adds each dashpot's force (`links`, in contact order, as
+/// [`dashpot_forces`](super::dashpot_forces) left them) into `out` (per
+/// boundary node, zeroed first): on the node and, weighted, on the facet's
+/// ends (eq. 2.7), in the order of [`Scatter`], in parallel over chunks of
+/// boundary nodes.
+pub fn assemble_dashpots(links: &[super::DashpotLink], out: &mut [Vec2], scratch: &mut Scatter) {
+    let nb = out.len();
+    scratch.size(nb.div_ceil(CHUNK));
+    let cross = &mut scratch.cross_dashpot;
+    out.par_chunks_mut(CHUNK).zip(cross.par_iter_mut()).enumerate().for_each(|(c, (oc, cross))| {
+        oc.iter_mut().for_each(|f| *f = [0.0; 2]);
+        cross.clear();
+        let base = c * CHUNK;
+        // the links of this chunk's nodes: links are in contact order
+        let first = links.partition_point(|l| (l.bnodes[0] as usize) < base);
+        let last = links.partition_point(|l| (l.bnodes[0] as usize) < base + oc.len());
+        for l in &links[first..last] {
+            let f = [l.force * l.normal[0], l.force * l.normal[1]];
+            for (t, wf) in shares(l.bnodes.map(|i| i as usize), l.xi, f) {
+                if t.wrapping_sub(base) < oc.len() {
+                    let i = t - base;
+                    oc[i][0] += wf[0];
+                    oc[i][1] += wf[1];
+                } else {
+                    cross.push((t as u32, wf));
+                }
+            }
+        }
+    });
+    for list in cross.iter() {
+        for &(t, wf) in list {
+            out[t as usize][0] += wf[0];
+            out[t as usize][1] += wf[1];
+        }
     }
 }
 
@@ -106,7 +233,7 @@ mod tests {
         first[0].dashpot.coefficient = 0.0; // no dashpot
         let (mut forces, mut damping, mut dashpot_sum) = (vec![[9.0; 2]; nb], vec![[9.0; 2]; nb], vec![[9.0; 2]; nb]);
         let (mut damped, mut ids) = (vec![9; nb], vec![7]);
-        assemble([&first, &corner], &busy, &mut forces, &mut damping, &mut damped, &mut ids);
+        assemble([&first, &corner], &busy, &mut forces, &mut damping, &mut damped, &mut ids, &mut Scatter::default());
         let nodes: Vec<u32> = (0..nb as u32).map(|b| 10 + b).collect();
         let mass: Vec<f64> = (0..nb + 10).map(|i| 1.0 + i as f64).collect();
         let v: Vec<Vec2> = (0..nb + 10).map(|i| [0.1 * i as f64, 0.3 - 0.05 * i as f64]).collect();
@@ -115,7 +242,7 @@ mod tests {
         let computed: Vec<f64> = links.iter().map(|l| l.force).collect();
         let fd: Vec<f64> = (0..links.len()).map(|i| 0.5 + i as f64).collect();
         links.iter_mut().zip(&fd).for_each(|(l, &f)| l.force = f);
-        assemble_dashpots(&links, &mut dashpot_sum);
+        assemble_dashpots(&links, &mut dashpot_sum, &mut Scatter::default());
         let list: Vec<u32> = links.iter().map(|l| l.bnodes[0]).collect();
         let (mut want_f, mut want_d, mut want_p) = (vec![[0.0; 2]; nb], vec![[0.0; 2]; nb], vec![[0.0; 2]; nb]);
         let (mut want_damped, mut want_list) = (vec![0u16; nb], Vec::new());
@@ -177,5 +304,133 @@ mod tests {
         assert_eq!(damped, want_damped);
         // node 0 is an end of three dashpots' facets, of node 5's with weight 0
         assert_eq!(damped[0], 2);
+    }
+
+    /// Over several chunks of boundary nodes the sums follow the order of
+    /// [`Scatter`] (each node: its own chunk's contacts in contact order,
+    /// then every other chunk's, chunk by chunk), bit for bit, on 1 and 3
+    /// threads, for the contact forces, their dashpot parts, the dashpot
+    /// counts and list, and the dashpots' scatter.
+    #[test]
+    fn the_chunked_assembly_sums_in_its_documented_order_on_any_thread_count() {
+        let nb = 2 * CHUNK + CHUNK / 2;
+        // a small deterministic generator (no dependency for one test)
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let empty = NodeContact { facet: NONE, ..Default::default() };
+        let mut contacts = [vec![empty; nb], vec![empty; nb]];
+        let mut busy = vec![0u8; nb];
+        for b in 0..nb {
+            for k in 0..2 {
+                if next() % 3 == 0 {
+                    continue;
+                }
+                // facet ends near the node mostly, anywhere now and then
+                let near = |r: u64| ((b as u64 + r % 40 + nb as u64 - 20) % nb as u64) as u32;
+                let (ra, rb) = (next(), next());
+                let ends = if ra % 10 == 0 { [(ra % nb as u64) as u32, near(rb)] } else { [near(ra), near(rb)] };
+                let f = (next() % 1000) as f64 * 1e3 - 4e5;
+                contacts[k][b] = NodeContact {
+                    facet: (next() % 5000) as u32,
+                    xi: (next() % 1001) as f64 / 1000.0,
+                    normal_force: f,
+                    tangential_force: 0.37 * f,
+                    dashpot: Dashpot {
+                        normal: [0.6, -0.8],
+                        coefficient: if next() % 4 == 0 { 0.0 } else { 1.0 + f.abs() },
+                        spring: 1.0,
+                    },
+                    ends,
+                    ..empty
+                };
+                busy[b] |= 1 << k;
+            }
+        }
+        // the documented order, written out
+        let chunk = |t: usize| t / CHUNK;
+        let mut want_f = vec![[0.0; 2]; nb];
+        let mut want_d = vec![[0.0; 2]; nb];
+        let mut want_n = vec![0u16; nb];
+        let mut want_ids = Vec::new();
+        for pass in 0..=nb.div_ceil(CHUNK) {
+            // pass 0: every node's own chunk; pass p: what chunk p − 1 adds elsewhere
+            for b in 0..nb {
+                for k in 0..2 {
+                    let c = &contacts[k][b];
+                    if c.facet == NONE {
+                        continue;
+                    }
+                    if pass == 0 && c.dashpot.coefficient > 0.0 {
+                        want_ids.push(2 * b as u32 + k as u32);
+                    }
+                    let [fa, fb] = c.ends.map(|i| i as usize);
+                    for (t, wf) in shares([b, fa, fb], c.xi, c.force()) {
+                        let mine = chunk(t) == chunk(b);
+                        if (pass == 0 && mine) || (pass > 0 && !mine && chunk(b) == pass - 1) {
+                            want_f[t][0] += wf[0];
+                            want_f[t][1] += wf[1];
+                        }
+                    }
+                    for (t, wd) in shares([b, fa, fb], c.xi, c.damping_force()) {
+                        let mine = chunk(t) == chunk(b);
+                        if (pass == 0 && mine) || (pass > 0 && !mine && chunk(b) == pass - 1) {
+                            want_d[t][0] += wd[0];
+                            want_d[t][1] += wd[1];
+                        }
+                    }
+                    if pass == 0 && c.dashpot.coefficient > 0.0 {
+                        for (t, w) in [(b, 1.0), (fa, 1.0 - c.xi), (fb, c.xi)] {
+                            want_n[t] += u16::from(w > 0.0);
+                        }
+                    }
+                }
+            }
+        }
+        assert!(want_ids.len() > 1000);
+        let links: Vec<DashpotLink> = want_ids
+            .iter()
+            .map(|&id| {
+                let c = &contacts[(id % 2) as usize][(id / 2) as usize];
+                DashpotLink {
+                    bnodes: [id / 2, c.ends[0], c.ends[1]],
+                    xi: c.xi,
+                    normal: c.dashpot.normal,
+                    force: 1.0 + (id % 97) as f64,
+                }
+            })
+            .collect();
+        let mut want_p = vec![[0.0; 2]; nb];
+        for pass in 0..=nb.div_ceil(CHUNK) {
+            for l in &links {
+                let b = l.bnodes[0] as usize;
+                let f = [l.force * l.normal[0], l.force * l.normal[1]];
+                for (t, wf) in shares(l.bnodes.map(|i| i as usize), l.xi, f) {
+                    let mine = chunk(t) == chunk(b);
+                    if (pass == 0 && mine) || (pass > 0 && !mine && chunk(b) == pass - 1) {
+                        want_p[t][0] += wf[0];
+                        want_p[t][1] += wf[1];
+                    }
+                }
+            }
+        }
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let (mut f, mut d, mut n, mut ids, mut p) =
+                (vec![[9.0; 2]; nb], vec![[9.0; 2]; nb], vec![9u16; nb], vec![7u32], vec![[9.0; 2]; nb]);
+            let mut scratch = Scatter::default();
+            pool.install(|| {
+                assemble([&contacts[0], &contacts[1]], &busy, &mut f, &mut d, &mut n, &mut ids, &mut scratch);
+                assemble_dashpots(&links, &mut p, &mut scratch);
+            });
+            assert!(f == want_f && d == want_d, "forces on {threads} threads");
+            assert_eq!(n, want_n);
+            assert_eq!(ids, want_ids);
+            assert!(p == want_p, "dashpots on {threads} threads");
+        }
     }
 }

@@ -2,11 +2,10 @@
 //! predicted velocities, by a backward-Euler step with each node's mass
 //! shared among the dashpots on it ([`Dashpot`]); each dashpot's force is
 //! worked out in parallel ([`dashpot_forces`]) and the forces are added up
-//! per boundary node in a fixed order ([`assemble_dashpots`]).
+//! per boundary node in a fixed order ([`assemble_dashpots`](super::assemble_dashpots)).
 
 use rayon::prelude::*;
 
-use super::assembly::spread;
 use super::NodeContact;
 use crate::{Vec2, CHUNK};
 
@@ -36,7 +35,7 @@ pub struct Dashpot {
 
 /// One contact's dashpot as the node pass applies it ([`Dashpot`]),
 /// gathered by [`dashpot_forces`] (in parallel) so that
-/// [`assemble_dashpots`] (sequential) reads one record per dashpot.
+/// [`assemble_dashpots`](super::assemble_dashpots) reads one record per dashpot.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DashpotLink {
     /// The node and the facet's two ends as boundary-node indices.
@@ -91,16 +90,6 @@ pub fn dashpot_forces(
     });
 }
 
-/// Adds the dashpot forces of `links` ([`dashpot_forces`]) into `out` (one
-/// entry per boundary node, zeroed first), in their order: deterministic.
-pub fn assemble_dashpots(links: &[DashpotLink], out: &mut [Vec2]) {
-    out.iter_mut().for_each(|f| *f = [0.0; 2]);
-    for l in links {
-        let f = [l.force * l.normal[0], l.force * l.normal[1]];
-        spread(out, l.bnodes.map(|i| i as usize), l.xi, f);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,7 +119,15 @@ mod tests {
         let inv_mu: f64 = 0.5 + 0.75 * 0.75 + 0.25 * 0.25 / 3.0;
         let mut ids = Vec::new();
         let (mut fs, mut ds, mut damped) = (vec![[0.0; 2]; 3], vec![[0.0; 2]; 3], vec![0; 3]);
-        assemble([&contacts[0], &contacts[1]], &busy, &mut fs, &mut ds, &mut damped, &mut ids);
+        assemble(
+            [&contacts[0], &contacts[1]],
+            &busy,
+            &mut fs,
+            &mut ds,
+            &mut damped,
+            &mut ids,
+            &mut crate::narrow::Scatter::default(),
+        );
         assert_eq!(damped, [1, 1, 1]);
         let force = |v: [Vec2; 3], share: u16| {
             let mut l = [DashpotLink::default()];

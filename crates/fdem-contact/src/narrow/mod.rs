@@ -15,8 +15,8 @@
 //!   one contact on its facet.
 //! * `records.rs`: what a node remembers between steps and its contact in
 //!   this step, with their saved forms.
-//! * `assembly.rs`: the sequential sum of the contact forces per boundary
-//!   node, in a fixed order.
+//! * `assembly.rs`: the sums of the contact forces and of the dashpots'
+//!   per boundary node, in parallel over fixed chunks, in a fixed order.
 //! * `dashpot.rs`: the dashpots' forces on the predicted velocities, in the
 //!   node pass.
 
@@ -28,8 +28,8 @@ mod records;
 mod response;
 mod search;
 
-pub use assembly::assemble;
-pub use dashpot::{assemble_dashpots, dashpot_forces, Dashpot, DashpotLink};
+pub use assembly::{assemble, assemble_dashpots, Scatter};
+pub use dashpot::{dashpot_forces, Dashpot, DashpotLink};
 pub use evaluation::{evaluate, evaluate_after_change, mark_busy, ContactPartial, Contacts, NarrowInputs};
 pub(crate) use projection::XI_SLACK;
 pub use projection::{facet_frames, project, FacetFrame};
