@@ -121,6 +121,7 @@ impl ContactModel {
         let most = 2 * surface.nodes.len();
         self.dashpot_ids.reserve(most.saturating_sub(self.dashpot_ids.len()));
         self.dashpot_links.reserve(most.saturating_sub(self.dashpot_links.len()));
+        self.scatter.reserve(surface.nodes.len());
     }
 
     /// Derives the busy flags from the memories (after they were set other
