@@ -23,7 +23,7 @@ that mode 2.7% of critical, and it rings for some 20 ms); each half's
 inertia in that mode loads its two ends alike, so the pad's and the
 supports' reactions swing in opposition, and their mean is the load
 that makes the bending moment at mid-span, (P + S)/2 · span/4. The
-mean takes out that ringing (its 150–500 Hz content falls tenfold on 10
+mean takes out that ringing (its 150–500 Hz content falls fivefold on 10
 mm) and halves the drag, which a quasi-static test does not have.
 
 Checks (``main`` returns them, tests/test_examples.py tests them):
