@@ -68,39 +68,79 @@ def test_notched_beam_runs_elastic_until_it_cracks(tmp_path):
     ligament) to 0.12 mm: no crack below about 8 kN/m, the curve and its
     picture written. Its stiffness against the closed form is read off
     the loading curve, and that depends on the samples fitted by ±5%
-    (docs/fracture.md); the slow test below checks it with the rest of
+    (docs/fracture.md); the slow tests below check it with the rest of
     issue 33 (3)."""
     r = load("three_point_bending").main(0.02, deflection=0.12e-3, out=str(tmp_path))
     assert r["cracks"] == 0 and r["peak_load"] > 0.4 * r["petersson_peak"]
     assert (tmp_path / "beam.png").stat().st_size > 10_000
-    assert (tmp_path / "beam.csv").read_text().startswith("time_s,deflection_m")
+    assert (tmp_path / "beam.csv").read_text().startswith("time_s,deflection_m,load_N_per_m")
+
+
+@pytest.fixture(scope="module")
+def beam_runs():
+    """The notched beam on 10, 7 and 5 mm at the ligament, and on 10 mm
+    with insertion at full softening (``late``): 14.5 min at one thread
+    on the 2-core Zen 5 VM, busy with another job."""
+    beam = load("three_point_bending")
+    runs = {size: beam.main(size, out=None) for size in (0.01, 0.007, 0.005)}
+    runs["late"] = beam.main(0.01, insert_at=1.0, out=None)
+    return runs
+
+
+@pytest.mark.slow
+def test_notched_beam_meshes_and_insertion(beam_runs):
+    """Issue 33 (3) on 10, 7 and 5 mm at the ligament, the load being the
+    mean of the pad's and the supports' reactions (docs/fracture.md, "The
+    notched beam"): with the default early insertion no insertion changes
+    the 1 ms mean load by more than 5% of the peak; the three peaks (1 ms
+    mean) lie within 5% of each other; the stiffness is the closed form
+    within 5%. Measured 2026-11-26: changes 3.2%, 2.5% and 1.6% (floors
+    2.8%, 3.7% and 2.1%); peaks 17.08, 17.65 and 17.67 kN/m (3.4% apart);
+    stiffness +1.4%, +0.4% and +0.1%."""
+    meshes = [beam_runs[size] for size in (0.01, 0.007, 0.005)]
+    for r in meshes:
+        assert r["stiffness"] == pytest.approx(r["closed_form_stiffness"], rel=0.05)
+        assert r["largest_change_at_insertion"] < 0.05
+    peaks = [r["peak_load"] for r in meshes]
+    assert max(peaks) <= 1.05 * min(peaks)
 
 
 @pytest.mark.slow
 @pytest.mark.xfail(
     strict=True,
-    reason="issue 33 (3), open: on the 7 mm mesh an insertion changes the load by 5.5% of the peak "
-    "(docs/fracture.md, 'The notched beam')",
+    reason="issue 33 (3), open: on 10 mm the default early insertion peaks 3.3% below insertion at full "
+    "softening (17.08 against 17.67 kN/m; docs/fracture.md, 'The notched beam')",
 )
-def test_notched_beam_meshes_and_insertion():
-    """Issue 33 (3) on 10 and 7 mm at the ligament (about 5 min on 2
-    cores): with the default early insertion no insertion changes the
-    1 ms mean load by more than 5% of the peak; the peak (1 ms mean) is
-    that of insertion at full softening (insert_at = 1, no bonds) within
-    3%, the same on both meshes within 5%, and within 10% of Petersson's
-    tests; the stiffness is the closed form within 5%. Measured
-    2026-11-26: changes 3.6% and 5.5% (floors 5.0% and 6.3%); peaks 17.34
-    and 17.22 kN/m against 17.80 with insert_at = 1 and 16 in the tests;
-    stiffness +1.0% and +0.3%."""
-    beam = load("three_point_bending")
-    runs = [beam.main(size, out=None) for size in (0.01, 0.007)]
-    late = beam.main(0.01, insert_at=1.0, out=None)
-    for r in runs:
-        assert r["stiffness"] == pytest.approx(r["closed_form_stiffness"], rel=0.05)
+def test_notched_beam_insertion_rule(beam_runs):
+    """Issue 33 (3): the peak does not depend on when a crack is inserted
+    by more than 3%: on 10 mm the default early insertion and insertion
+    at full softening (``insert_at = 1``, no bonds, the paper's rule).
+    Measured 2026-11-26: 17.08 against 17.67 kN/m, 3.3% apart. The
+    bands of triangles that soften fully before a crack is cut lock
+    (docs/fracture.md, "Why cracks are inserted early") and carry more;
+    on the pad's reaction alone the two read 17.35 and 17.79 kN/m, 2.5%
+    apart, because the pad's 1 ms mean keeps some of the ringing that
+    the early insertions set off, and its peak with it."""
+    assert beam_runs[0.01]["peak_load"] == pytest.approx(beam_runs["late"]["peak_load"], rel=0.03)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 33 (3), open: with linear softening the 7 and 5 mm beams peak 10.3% and 10.4% above "
+    "Petersson's tests, whose concrete softened bilinearly (docs/fracture.md, 'The notched beam')",
+)
+def test_notched_beam_peak_against_petersson(beam_runs):
+    """Issue 33 (3): the peak within 10% of Petersson's tests (about 0.8
+    kN on 50 mm thick beams, 16 kN/m) on every mesh. Measured 2026-11-26:
+    +6.8%, +10.3% and +10.4% on 10, 7 and 5 mm. The law is not the
+    tests': fdem softens linearly, and a linear curve with the same G_f
+    falls 1.7 times slower at first than Petersson's bilinear fit, which
+    raises the peak; no published peak of this beam with linear softening
+    was found to test against instead."""
+    for size in (0.01, 0.007, 0.005):
+        r = beam_runs[size]
         assert r["peak_load"] == pytest.approx(r["petersson_peak"], rel=0.10)
-        assert r["largest_change_at_insertion"] < 0.05
-    assert runs[0]["peak_load"] == pytest.approx(late["peak_load"], rel=0.03)
-    assert runs[1]["peak_load"] == pytest.approx(runs[0]["peak_load"], rel=0.05)
 
 
 def test_caving_ensemble_example(tmp_path):
