@@ -23,15 +23,18 @@ use crate::{Vec2, CHUNK, NONE};
 /// order, the order of the serial assembly this replaced.
 #[derive(Debug, Default)]
 pub struct Scatter {
-    /// Per chunk: (target boundary node, force, dashpot part of it).
-    cross: Vec<Vec<(u32, Vec2, Vec2)>>,
+    /// Per chunk: the contributions to boundary nodes of other chunks, as
+    /// `4 (2b + k) + j`: share `j` ([`shares`]) of contact `k` of node `b`,
+    /// worked out again when added (the same arithmetic, so the same bits;
+    /// 4 bytes an entry instead of 40).
+    cross: Vec<Vec<u32>>,
     /// Per chunk: dashpot counts on boundary nodes of other chunks.
     cross_damped: Vec<Vec<u32>>,
     /// Per chunk: its contacts with a dashpot (`2b + k`).
     dashpots: Vec<Vec<u32>>,
-    /// Per chunk: (target boundary node, dashpot force) of the dashpots'
-    /// scatter, to boundary nodes of other chunks.
-    cross_dashpot: Vec<Vec<(u32, Vec2)>>,
+    /// Per chunk: the dashpots' contributions to boundary nodes of other
+    /// chunks, as `4 l + j`: share `j` of link `l`.
+    cross_dashpot: Vec<Vec<u32>>,
 }
 
 /// Entries each chunk's cross lists hold before they grow: an eighth of
@@ -40,6 +43,7 @@ pub struct Scatter {
 /// in the fragmenting impact with renumbering on (a chunk of 1 024 nodes
 /// sends about 430), so the lists seldom grow; when one does, it keeps
 /// its capacity (an allocation of the time loop, a few per chunk in a run).
+/// With 4-byte entries the reserve is about 14 KB a chunk.
 const CROSS_RESERVE: usize = CHUNK / 2;
 
 impl Scatter {
@@ -134,7 +138,7 @@ pub fn assemble(
                     let [fa, fb] = ct.ends.map(|i| i as usize);
                     let fs = shares([b, fa, fb], ct.xi, ct.force());
                     let ds = shares([b, fa, fb], ct.xi, ct.damping_force());
-                    for ((t, wf), (_, wd)) in fs.into_iter().zip(ds) {
+                    for (j, ((t, wf), (_, wd))) in fs.into_iter().zip(ds).enumerate() {
                         if local(t) {
                             let i = t - base;
                             for e in 0..2 {
@@ -142,7 +146,7 @@ pub fn assemble(
                                 dc[i][e] += wd[e];
                             }
                         } else {
-                            cross.push((t as u32, wf, wd));
+                            cross.push(4 * (2 * b as u32 + k as u32) + j as u32);
                         }
                     }
                     if ct.dashpot.coefficient > 0.0 {
@@ -162,8 +166,12 @@ pub fn assemble(
         });
     // what crosses chunks, chunk by chunk in order
     for list in cross.iter() {
-        for &(t, wf, wd) in list {
-            let t = t as usize;
+        for &code in list {
+            let (id, j) = ((code / 4) as usize, (code % 4) as usize);
+            let (b, ct) = (id / 2, &contacts[id % 2][id / 2]);
+            let ends = [b, ct.ends[0] as usize, ct.ends[1] as usize];
+            let (t, wf) = shares(ends, ct.xi, ct.force())[j];
+            let (_, wd) = shares(ends, ct.xi, ct.damping_force())[j];
             for e in 0..2 {
                 forces[t][e] += wf[e];
                 damping[t][e] += wd[e];
@@ -197,25 +205,31 @@ pub fn assemble_dashpots(links: &[super::DashpotLink], out: &mut [Vec2], scratch
         // the links of this chunk's nodes: links are in contact order
         let first = links.partition_point(|l| (l.bnodes[0] as usize) < base);
         let last = links.partition_point(|l| (l.bnodes[0] as usize) < base + oc.len());
-        for l in &links[first..last] {
-            let f = [l.force * l.normal[0], l.force * l.normal[1]];
-            for (t, wf) in shares(l.bnodes.map(|i| i as usize), l.xi, f) {
+        for (n, l) in links[first..last].iter().enumerate() {
+            for (j, (t, wf)) in link_shares(l).into_iter().enumerate() {
                 if t.wrapping_sub(base) < oc.len() {
                     let i = t - base;
                     oc[i][0] += wf[0];
                     oc[i][1] += wf[1];
                 } else {
-                    cross.push((t as u32, wf));
+                    cross.push(4 * (first + n) as u32 + j as u32);
                 }
             }
         }
     });
     for list in cross.iter() {
-        for &(t, wf) in list {
-            out[t as usize][0] += wf[0];
-            out[t as usize][1] += wf[1];
+        for &code in list {
+            let (t, wf) = link_shares(&links[(code / 4) as usize])[(code % 4) as usize];
+            out[t][0] += wf[0];
+            out[t][1] += wf[1];
         }
     }
+}
+
+/// A dashpot link's force (along its normal) as [`shares`].
+#[inline(always)]
+fn link_shares(l: &super::DashpotLink) -> [(usize, Vec2); 3] {
+    shares(l.bnodes.map(|i| i as usize), l.xi, [l.force * l.normal[0], l.force * l.normal[1]])
 }
 
 #[cfg(test)]
