@@ -8,7 +8,7 @@
 //! rayon's scheduler allocates now and then on more than one thread (the
 //! garbage bags of crossbeam-epoch, under its work-stealing deques): an
 //! allocation in the window is looked up in its backtrace, and those are
-//! counted apart.
+//! left out.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -26,9 +26,8 @@ struct Counting;
 static CALLS: AtomicU64 = AtomicU64::new(0);
 /// Whether a window is being watched.
 static WATCH: AtomicBool = AtomicBool::new(false);
-/// In the window: allocations of the scheduler, and all others (fdem's),
-/// with the backtrace of the first of those.
-static SCHEDULER: AtomicU64 = AtomicU64::new(0);
+/// In the window: fdem's allocations (all but the scheduler's), with the
+/// backtrace of the first.
 static OURS: AtomicU64 = AtomicU64::new(0);
 static FIRST: Mutex<String> = Mutex::new(String::new());
 
@@ -45,9 +44,7 @@ fn count() {
     }
     LOOKING.with(|l| l.set(true));
     let trace = std::backtrace::Backtrace::force_capture().to_string();
-    if trace.contains("crossbeam_epoch") {
-        SCHEDULER.fetch_add(1, Ordering::Relaxed);
-    } else if OURS.fetch_add(1, Ordering::Relaxed) == 0 {
+    if !trace.contains("crossbeam_epoch") && OURS.fetch_add(1, Ordering::Relaxed) == 0 {
         *FIRST.lock().unwrap_or_else(|e| e.into_inner()) = trace;
     }
     LOOKING.with(|l| l.set(false));
@@ -71,10 +68,9 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
 
-/// Runs `steps` steps of `sim` as a watched window; returns fdem's
-/// allocations and the scheduler's, and fails with the first of fdem's.
-fn watch(sim: &mut Simulation, steps: u64, what: &str) -> u64 {
-    SCHEDULER.store(0, Ordering::Relaxed);
+/// Runs `steps` steps of `sim` as a watched window, and fails with the
+/// first of fdem's allocations in it.
+fn watch(sim: &mut Simulation, steps: u64, what: &str) {
     OURS.store(0, Ordering::Relaxed);
     WATCH.store(true, Ordering::Relaxed);
     sim.step(steps).expect("the impact runs");
@@ -82,7 +78,6 @@ fn watch(sim: &mut Simulation, steps: u64, what: &str) -> u64 {
     let ours = OURS.load(Ordering::Relaxed);
     let first = FIRST.lock().unwrap_or_else(|e| e.into_inner()).clone();
     assert_eq!(ours, 0, "{ours} allocations in {steps} steps ({what}); the first:\n{first}");
-    SCHEDULER.load(Ordering::Relaxed)
 }
 
 /// One test, not two: the counter is global, and the harness allocates

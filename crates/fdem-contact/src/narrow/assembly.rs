@@ -107,6 +107,7 @@ pub fn assemble(
     scratch.size(nb.div_ceil(CHUNK));
     forces[nb..].iter_mut().for_each(|f| *f = [0.0; 2]);
     damping[nb..].iter_mut().for_each(|f| *f = [0.0; 2]);
+    damped[nb..].iter_mut().for_each(|d| *d = 0);
     let Scatter { cross, cross_damped, dashpots: chunk_dashpots, .. } = scratch;
     forces[..nb]
         .par_chunks_mut(CHUNK)
