@@ -26,6 +26,9 @@ PALABORA = dict(E=60e9, nu=0.25, rho=3100.0, c=8e6, phi=55.0, psi=9.0, ft=1e6, G
         ({"Gf": 0.0}, r"^Gf = 0.0 must be positive"),
         ({"Gf": -70.0}, r"^Gf = -70.0"),
         ({"crack_band": "round"}, r"crack_band = 'round'"),
+        ({"softening": "exponential"}, r"^softening = 'exponential' must be 'linear', 'bilinear' or a kink"),
+        ({"softening": (1.2, 0.2)}, r"^softening = \(1.2, 0.2\) must be .* both in \(0, 1\)"),
+        ({"softening": 0.3}, r"^softening = 0.3 must be"),
         ({"E": -1.0}, r"^E = -1.0"),
     ],
 )
@@ -129,6 +132,25 @@ def test_coarse_mesh_beyond_snap_back_is_rejected_naming_the_element():
     with pytest.raises(ValueError, match=r"element 0 is 14.1421 m across, larger than the snap-back limit .* 8.9600 m"):
         fdem.Simulation(fdem.Model(mesh, material=rock))
     fdem.Simulation(fdem.Model(fdem.Mesh.rectangle(40.0, 20.0, 8, 4), material=rock))
+
+
+def test_bilinear_softening_has_its_own_snap_back_limit():
+    """Petersson's curve on Table 1's rock: w_c = 3.6 Gf/ft, and the
+    steepest branch (3 ft/w_c) sets the snap-back limit E' w_c / (3 ft) =
+    5.376 m, against 8.96 m with linear softening. The kernel checks the
+    same limit: 5 m cells (7.07 m across) pass with linear softening and
+    are rejected, naming the element, with bilinear."""
+    rock = fdem.MohrCoulombRankine(**PALABORA, softening="bilinear")
+    assert rock.softening_kink == pytest.approx((1 / 3, 2 / 9), rel=1e-15)
+    assert rock.critical_opening == pytest.approx(3.6 * 70 / 1e6, rel=1e-14)
+    limit = 60e9 / (1 - 0.25**2) * 3.6 * 70 / 1e6 / 3e6
+    assert rock.snap_back_size == pytest.approx(limit, rel=1e-14)
+    mesh = fdem.Mesh.rectangle(40.0, 20.0, 8, 4)
+    fdem.Simulation(fdem.Model(mesh, material=fdem.MohrCoulombRankine(**PALABORA)))
+    with pytest.raises(ValueError, match=r"element 0 is 7.0711 m across, larger than the snap-back limit .* 5.3760 m"):
+        fdem.Simulation(fdem.Model(mesh, material=rock))
+    general = fdem.MohrCoulombRankine(**PALABORA, softening=(0.25, 0.1))
+    assert general.critical_opening == pytest.approx(70 / 1e6 / (0.5 * 0.35), rel=1e-14)
 
 
 def test_state_is_written_to_the_output(tmp_path):

@@ -9,7 +9,7 @@ from typing import Any
 from ._checks import number
 from .errors import warn_implausible
 
-__all__ = ["Elastic", "MohrCoulombRankine", "GII_PER_GF"]
+__all__ = ["Elastic", "MohrCoulombRankine", "GII_PER_GF", "PETERSSON_KINK"]
 
 #: The default ratio of the bonds' mode-II to mode-I fracture energy: 1, the
 #: single fracture energy of Munjiza's Y code (Munjiza 2004, *The combined
@@ -21,6 +21,11 @@ __all__ = ["Elastic", "MohrCoulombRankine", "GII_PER_GF"]
 #: softens to 44% of its peak at 4 times its yield strain with ``GII = Gf``
 #: and to 75% with ``4 Gf`` (docs/fracture.md, "Mixed-mode bonds").
 GII_PER_GF = 1.0
+
+#: The kink ``(s_k, F_k)`` of Petersson's (1981) bilinear softening curve
+#: for concrete, ``softening="bilinear"``: ``ft/3`` at ``0.8 Gf/ft`` with
+#: ``w_c = 3.6 Gf/ft``.
+PETERSSON_KINK = (1.0 / 3.0, 2.0 / 9.0)
 
 
 @dataclass(frozen=True)
@@ -95,8 +100,8 @@ class Elastic:
 @dataclass(frozen=True)
 class MohrCoulombRankine(Elastic):
     """Mohr–Coulomb shear failure (perfectly plastic, non-associated) with a
-    Rankine tension cut-off softening linearly to zero over the fracture
-    energy (Ecsi & Élesztős 2003, appendices A–C).
+    Rankine tension cut-off softening to zero over the fracture energy,
+    linearly by default (Ecsi & Élesztős 2003, appendices A–C).
 
     Parameters
     ----------
@@ -122,11 +127,20 @@ class MohrCoulombRankine(Elastic):
         How the crack-band width ``h_c`` is measured: the element's width along
         σ1 when it first reaches ``ft`` (default; Oliver 1989), or the paper's
         ``√(4A/π)`` (about 20% too much dissipation for a band one element wide).
+    softening : {"linear", "bilinear"} or (float, float)
+        Shape of the tensile softening curve ``σ = ft s(w / w_c)`` with
+        ``Gf = ft w_c ∫s`` (docs/fracture.md, "Softening laws"): ``"linear"``
+        (default, the paper's: ``w_c = 2 Gf / ft``), ``"bilinear"``
+        (Petersson 1981 for concrete: ``ft/3`` at ``0.8 Gf/ft``, zero at
+        ``3.6 Gf/ft``), or a bilinear curve's kink ``(s_k, F_k)``: traction
+        ``s_k ft`` at opening ``F_k w_c``, both in (0, 1). The crack band
+        and the cohesive bonds follow the same curve.
 
     Notes
     -----
-    The softening modulus is ``H = h_c ft² / (2 Gf)``; an element wider than
-    the snap-back limit ``2 E' Gf / ft²`` is rejected when the model is run.
+    With linear softening the softening modulus is ``H = h_c ft² / (2 Gf)``;
+    an element wider than the snap-back limit (:attr:`snap_back_size`,
+    ``2 E' Gf / ft²`` for linear softening) is rejected when the model is run.
     Table 1 of the paper: ``MohrCoulombRankine(E=60e9, nu=0.25, rho=3100,
     c=8e6, phi=55, psi=9, ft=1e6, Gf=70)``.
     """
@@ -138,6 +152,7 @@ class MohrCoulombRankine(Elastic):
     Gf: float = 0.0
     crack_band: str = "oliver"
     GII: float | None = None
+    softening: str | tuple[float, float] = "linear"
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -173,6 +188,20 @@ class MohrCoulombRankine(Elastic):
                 raise ValueError(f"GII = {self.GII} must be positive (mode-II fracture energy, N/m)")
         if self.crack_band not in ("oliver", "equivalent"):
             raise ValueError(f"crack_band = {self.crack_band!r} must be 'oliver' or 'equivalent'")
+        if isinstance(self.softening, str):
+            if self.softening not in ("linear", "bilinear"):
+                raise ValueError(f"softening = {self.softening!r} must be 'linear', 'bilinear' or a kink (s_k, F_k)")
+        else:
+            try:
+                kink = tuple(number("softening", v) for v in self.softening)
+            except TypeError:
+                kink = ()
+            if len(kink) != 2 or not all(0 < v < 1 for v in kink):
+                raise ValueError(
+                    f"softening = {self.softening!r} must be 'linear', 'bilinear' or a kink (s_k, F_k) "
+                    "with both in (0, 1): traction s_k ft at opening F_k w_c"
+                )
+            object.__setattr__(self, "softening", kink)
 
     @property
     def ucs(self) -> float:
@@ -199,9 +228,32 @@ class MohrCoulombRankine(Elastic):
         return self.GII if self.GII is not None else GII_PER_GF * self.Gf
 
     @property
+    def softening_kink(self) -> tuple[float, float] | None:
+        """The kink ``(s_k, F_k)`` of a bilinear softening curve, ``None``
+        for linear softening."""
+        if self.softening == "linear":
+            return None
+        if self.softening == "bilinear":
+            return PETERSSON_KINK
+        return self.softening  # type: ignore[return-value]
+
+    @property
+    def critical_opening(self) -> float:
+        """Crack opening ``w_c`` (m) at which the traction reaches zero:
+        ``2 Gf / ft`` for linear softening, ``3.6 Gf / ft`` for Petersson's."""
+        kink = self.softening_kink
+        area = 0.5 if kink is None else 0.5 * (kink[0] + kink[1])
+        return self.Gf / (self.ft * area)
+
+    @property
     def snap_back_size(self) -> float:
-        """Largest element size without snap-back, ``2 E' Gf / ft²`` (m)."""
-        return 2 * self.plane_strain_modulus * self.Gf / self.ft**2
+        """Largest element size without snap-back (m): ``E' w_c / (ft
+        max|s'|)``, ``2 E' Gf / ft²`` for linear softening."""
+        kink = self.softening_kink
+        if kink is None:
+            return 2 * self.plane_strain_modulus * self.Gf / self.ft**2
+        steepest = max((1 - kink[0]) / kink[1], kink[0] / (1 - kink[1]))
+        return self.plane_strain_modulus * self.critical_opening / (self.ft * steepest)
 
     def _kernel_dict(self) -> dict[str, Any]:
         return {
@@ -214,4 +266,5 @@ class MohrCoulombRankine(Elastic):
             "Gf": self.Gf,
             "GII": self.shear_fracture_energy,
             "crack_band": self.crack_band,
+            "softening_kink": self.softening_kink,
         }

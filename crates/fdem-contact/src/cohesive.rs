@@ -38,6 +38,16 @@
 //! Either way `½ t₀ δ_c = (1 − F̄)² G_f` in pure opening: band and bond
 //! together dissipate `G_f`. A broken bond is dropped and the faces interact
 //! by contact alone.
+//!
+//! **Bilinear softening** (materials with a bilinear curve, checkpoint
+//! format 10). A bond made before its material's kink continues the curve
+//! from there: its mixed-mode envelope falls from the peak `T_m = k δ_m⁰`
+//! straight to a [`Kink`] (`q T_m` at `δ_m⁰ + a (δ_m^f − δ_m⁰)`), then
+//! straight to zero at `δ_m^f`, the fractions `a` and `q` those of the
+//! material's curve after `F̄`. Its area is still `G_c`, so `δ_m^f = δ_m⁰ +
+//! (G_c − ½ T_m δ_m⁰) / (T_m (a + q)/2)`; `½ t₀ δ_c` is then the mode-I
+//! energy `G_f` owes past `F̄`, no longer the opening where the traction
+//! ends. Without a kink the envelope is the linear one.
 
 use crate::Vec2;
 
@@ -52,7 +62,10 @@ pub struct Bond {
     pub stiffness: f64,
     /// Strength `t₀` (Pa) left when the crack was inserted.
     pub strength: f64,
-    /// Opening `δ_c` (m) at which the traction reaches zero.
+    /// Opening `δ_c` (m) at which the traction reaches zero in pure
+    /// opening on a straight envelope; generally `2 G_I / t₀`, with `G_I`
+    /// the mode-I energy the bond dissipates (module notes: a bond with a
+    /// [`Kink`] ends further out).
     pub final_opening: f64,
     /// Largest opening `δ_max` (m) so far.
     pub max_opening: f64,
@@ -91,6 +104,22 @@ pub struct MixedMode {
     pub shear_energy: f64,
     /// Damage `D` (0 to 1), the largest so far.
     pub damage: f64,
+    /// The kink of a bilinear envelope; `None`: straight (module notes).
+    /// Checkpoints keep it beside the bonds (format 10), so it is not part
+    /// of this type's serial form.
+    #[serde(skip)]
+    pub kink: Option<Kink>,
+}
+
+/// Where a bilinear envelope bends, as fractions of the envelope of the
+/// current mode (module notes).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Kink {
+    /// Position `a` along the softening span, from the onset (0) to the
+    /// final opening (1), `0 < a < 1`.
+    pub at: f64,
+    /// Traction there `q`, as a fraction of the peak, `0 < q < 1`.
+    pub traction: f64,
 }
 
 /// Opening `δ_n = d·n` and slip `δ_s = d·t`, `t = (−n_y, n_x)` (m), of
@@ -107,20 +136,68 @@ fn components(m: &MixedMode, d: Vec2) -> (f64, f64) {
 struct Envelope {
     onset: f64,
     last: f64,
+    kink: Option<Kink>,
 }
 
 impl Envelope {
     /// Damage `δ_m^f (δ − δ_m⁰) / (δ (δ_m^f − δ_m⁰))` at opening `delta`
-    /// (m): zero before onset, one at `δ_m^f`.
+    /// (m) on a straight envelope, `1 − t(δ)/(k δ)` on a kinked one: zero
+    /// before onset, one at `δ_m^f`.
     #[inline]
-    fn damage(&self, delta: f64) -> f64 {
+    fn damage(&self, k: f64, delta: f64) -> f64 {
         if delta <= self.onset {
             0.0
         } else if delta >= self.last {
             1.0
+        } else if self.kink.is_some() {
+            1.0 - self.kinked_traction(k, delta) / (k * delta)
         } else {
             self.last * (delta - self.onset) / (delta * (self.last - self.onset))
         }
+    }
+
+    /// The kinked envelope's corners: peak `T`, the kink's opening and
+    /// traction.
+    #[inline]
+    fn corners(&self, k: f64, kink: Kink) -> (f64, f64, f64) {
+        let peak = k * self.onset;
+        (peak, self.onset + kink.at * (self.last - self.onset), kink.traction * peak)
+    }
+
+    /// Traction (Pa) on a kinked envelope at `onset ≤ delta ≤ last`.
+    #[inline]
+    fn kinked_traction(&self, k: f64, delta: f64) -> f64 {
+        let Some(kink) = self.kink else { return 0.0 };
+        let (peak, dk, tk) = self.corners(k, kink);
+        if delta <= dk {
+            peak - (peak - tk) * (delta - self.onset) / (dk - self.onset)
+        } else {
+            tk * (self.last - delta) / (self.last - dk)
+        }
+    }
+
+    /// [`Self::dissipation`] on a kinked envelope: the opening at which
+    /// the damage is `d` solves `t(δ) = k (1 − d) δ` on the branch where
+    /// it falls, `δ = A / (k (1 − d) + B)` for a branch `t = A − B δ`.
+    fn kinked_dissipation(&self, k: f64, kink: Kink, d: f64) -> f64 {
+        let (a, f) = (self.onset, self.last);
+        let (peak, dk, tk) = self.corners(k, kink);
+        let b1 = (peak - tk) / (dk - a);
+        let b2 = tk / (f - dk);
+        let delta = if d >= 1.0 {
+            f
+        } else if d <= 1.0 - tk / (k * dk) {
+            ((peak + b1 * a) / (k * (1.0 - d) + b1)).clamp(a, dk)
+        } else {
+            ((b2 * f) / (k * (1.0 - d) + b2)).clamp(dk, f)
+        };
+        let t = self.kinked_traction(k, delta);
+        let first = delta.min(dk);
+        let mut area = 0.5 * peak * a + 0.5 * (peak + self.kinked_traction(k, first)) * (first - a);
+        if delta > dk {
+            area += 0.5 * (tk + t) * (delta - dk);
+        }
+        area - 0.5 * t * delta
     }
 
     /// Energy (J/m²) dissipated, along this mode, once the damage is `d`:
@@ -129,6 +206,9 @@ impl Envelope {
     fn dissipation(&self, k: f64, d: f64) -> f64 {
         if d <= 0.0 {
             return 0.0;
+        }
+        if let Some(kink) = self.kink {
+            return self.kinked_dissipation(k, kink, d);
         }
         let (a, f) = (self.onset, self.last);
         let span = f - a;
@@ -219,7 +299,7 @@ impl Bond {
             }
             let (dn, ds) = components(&m, d);
             let (dm, env) = self.mixed_envelope(&m, dn, ds);
-            let now = env.damage(dm);
+            let now = env.damage(self.stiffness, dm);
             // most bonds most steps hold or unload: no damage grows and
             // nothing is dissipated (what the difference below gives then)
             let mut dissipated = 0.0;
@@ -305,8 +385,14 @@ impl Bond {
         let (c, s) = if dm > 0.0 { (open / dm, ds.abs() / dm) } else { (1.0, 0.0) };
         let onset = 1.0 / (k * ((c / t0).powi(2) + (s / s0).powi(2)).sqrt());
         let g = 0.5 * t0 * self.final_opening * c * c + m.shear_energy * s * s;
-        let last = (2.0 * g / (k * onset)).max(onset * (1.0 + 1e-9));
-        (dm, Envelope { onset, last })
+        let last = match m.kink {
+            None => 2.0 * g / (k * onset),
+            Some(kink) => {
+                let peak = k * onset;
+                onset + (g - 0.5 * peak * onset) / (0.5 * peak * (kink.at + kink.traction))
+            }
+        };
+        (dm, Envelope { onset, last: last.max(onset * (1.0 + 1e-9)), kink: m.kink })
     }
 
     /// Force on node `b` and elastic energy of the mixed-mode law at
@@ -448,6 +534,7 @@ mod tests {
                 friction: 0.8,
                 shear_energy: 400.0,
                 damage: 0.0,
+                kink: None,
             }),
             ..bond()
         }
@@ -571,6 +658,64 @@ mod tests {
             let expected = (100.0 * c * c + 400.0 * s * s) * b.length;
             assert!((w - expected).abs() < 1e-9 * expected, "β {beta}: {w} vs {expected}");
         }
+    }
+
+    /// A bond on the rest of Petersson's curve from its start (kink at
+    /// 2/9 of the span and a third of the peak): in pure opening the
+    /// traction falls from T to T/3 at the kink and on to zero, each step's
+    /// traction within 10⁻⁹ of the two straight branches (unloading and
+    /// reloading on the secant), and the bond dissipates `G_I = ½ T δ_c`
+    /// in all, in pure slip `G_II`, to 10⁻⁹ (the closed form of the
+    /// kinked envelope's area).
+    #[test]
+    fn kinked_envelope_follows_its_branches_and_dissipates_g() {
+        let kinked = || {
+            let mut b = mixed();
+            if let Some(m) = b.mode.as_mut() {
+                m.kink = Some(Kink { at: 2.0 / 9.0, traction: 1.0 / 3.0 });
+            }
+            b
+        };
+        let mut b = kinked();
+        let (k, t0) = (b.stiffness, b.strength);
+        let onset = t0 / k;
+        // G_I = 100 J/m²: the span from the envelope's area, (a + q)/2 = 5/18
+        let last = onset + (100.0 - 0.5 * t0 * onset) / (t0 * 5.0 / 18.0);
+        let knee = onset + 2.0 / 9.0 * (last - onset);
+        let branch = |d: f64| {
+            if d <= onset {
+                k * d
+            } else if d <= knee {
+                t0 - (t0 - t0 / 3.0) * (d - onset) / (knee - onset)
+            } else {
+                (t0 / 3.0 * (last - d) / (last - knee)).max(0.0)
+            }
+        };
+        let n = b.mode.expect("mixed").normal;
+        let mut largest = 0.0_f64;
+        let mut total = 0.0;
+        let path: Vec<f64> = ramp(0.5 * knee, 500)
+            .chain(ramp(0.5 * knee, 100).map(|x| 0.5 * knee - x))
+            .chain(ramp(1.1 * last, 5000))
+            .collect();
+        for d in path {
+            let r = b.update([0.0; 2], [d * n[0], d * n[1]]);
+            total += r.dissipated;
+            let t = -(r.force[0] * n[0] + r.force[1] * n[1]) / b.length;
+            if d >= largest {
+                assert!((t - branch(d)).abs() < 1e-9 * t0, "opening {d}: {t} against {}", branch(d));
+            }
+            largest = largest.max(d);
+        }
+        let expected = 100.0 * b.length;
+        assert!((total - expected).abs() < 1e-9 * expected, "{total} vs {expected}");
+        assert!(b.damage() >= 1.0);
+        let mut b = kinked();
+        let (w, _, ts, broken) = drive(&mut b, ramp(1e-3, 20_000).map(|x| (0.0, x)));
+        assert!(broken);
+        assert!((ts - 5e6).abs() < 5e6 * 1e-3, "peak shear traction {ts}");
+        let expected = 400.0 * b.length;
+        assert!((w - expected).abs() < 1e-9 * expected, "{w} vs {expected}");
     }
 
     /// `force` repeats the last update bit for bit for the mixed law too,

@@ -24,7 +24,7 @@ pub mod narrow;
 pub mod surface;
 
 pub use broad::BroadPhase;
-pub use cohesive::{Bond, BondResponse, MixedMode};
+pub use cohesive::{Bond, BondResponse, Kink, MixedMode};
 pub use fdem_core::{Vec2, CHUNK, NONE};
 pub use law::{InterfaceLaw, LawError};
 pub use narrow::{ContactState, Dashpot, NodeContact};

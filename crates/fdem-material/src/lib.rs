@@ -10,14 +10,18 @@
 //! * [`mohr_coulomb_rankine`]: the paper's combined Mohr–Coulomb and Rankine
 //!   multi-surface plasticity with fracture-energy softening (appendices A–C).
 //! * [`principal`]: principal values with `σ_zz` as one of the three.
+//! * [`softening`]: the shape of the tensile softening curve (linear, or
+//!   bilinear as Petersson's for concrete).
 
 mod dense;
 pub mod elastic;
 pub mod mohr_coulomb_rankine;
 pub mod principal;
+pub mod softening;
 
 pub use elastic::Elastic;
 pub use mohr_coulomb_rankine::{CrackBand, Geometry, MohrCoulombRankine, PlasticState, Update};
+pub use softening::Softening;
 
 /// Errors in material parameters, naming the offending parameter.
 #[derive(Clone, Debug, PartialEq)]

@@ -36,6 +36,7 @@
 use crate::dense::{solve, MAX};
 use crate::elastic::Elastic;
 use crate::principal::{DirectionCode, Order, Spectral};
+use crate::softening::Softening;
 use crate::{check, ParameterError};
 
 /// How the crack-band width `h_c` of an element is measured.
@@ -128,6 +129,11 @@ pub struct MohrCoulombRankine {
     pub fracture_energy: f64,
     /// Crack-band rule.
     pub crack_band: CrackBand,
+    /// Shape of the softening curve ([`Softening`]); linear unless set by
+    /// [`Self::with_softening`]. Checkpoints keep it beside the materials
+    /// (format 10), so it is not part of this type's serial form.
+    #[serde(skip)]
+    pub softening: Softening,
     sin_phi: f64,
     cos_phi: f64,
     sin_psi: f64,
@@ -232,6 +238,7 @@ pub struct Update {
 struct Trial {
     s: [f64; 3],
     kappa: f64,
+    band: f64,
     sy: f64,
     h: f64,
     f: [f64; 6],
@@ -241,7 +248,7 @@ struct Trial {
 impl Trial {
     fn new(law: &MohrCoulombRankine, s: [f64; 3], kappa: f64, crack_band: f64, reject: f64) -> Self {
         let (sy, h) = law.strength(kappa, crack_band);
-        Self { s, kappa, sy, h, f: law.yield_functions(s, sy), reject }
+        Self { s, kappa, band: crack_band, sy, h, f: law.yield_functions(s, sy), reject }
     }
 }
 
@@ -303,6 +310,7 @@ impl MohrCoulombRankine {
             tensile_strength,
             fracture_energy,
             crack_band,
+            softening: Softening::Linear,
             sin_phi: friction.sin(),
             cos_phi: friction.cos(),
             sin_psi: dilation.sin(),
@@ -323,6 +331,18 @@ impl MohrCoulombRankine {
         Ok(law)
     }
 
+    /// The law with softening curve `softening`, checked.
+    pub fn with_softening(mut self, softening: Softening) -> Result<Self, ParameterError> {
+        self.softening = softening.checked()?;
+        Ok(self)
+    }
+
+    /// Critical crack opening `w_c = G_f / (f_t ∫s)` (m), at which the
+    /// traction reaches zero: `2 G_f / f_t` for linear softening.
+    pub fn critical_opening(&self) -> f64 {
+        self.fracture_energy / (self.tensile_strength * self.softening.area())
+    }
+
     /// Uniaxial compressive strength `2 c cos φ / (1 − sin φ)` (Pa).
     pub fn ucs(&self) -> f64 {
         2.0 * self.cohesion * self.cos_phi / (1.0 - self.sin_phi)
@@ -338,16 +358,32 @@ impl MohrCoulombRankine {
         (1.0 + self.sin_psi) / (1.0 - self.sin_psi)
     }
 
-    /// Largest element size without snap-back, `2 E' G_f / f_t²` (m), with
-    /// the plane-strain modulus `E' = E / (1 − ν²)`.
+    /// Largest element size without snap-back (m): the band whose
+    /// steepest softening slope equals the plane-strain modulus
+    /// `E' = E / (1 − ν²)`, `E' w_c / (f_t max|s'|)`; `2 E' G_f / f_t²` for
+    /// linear softening.
     pub fn snap_back_size(&self) -> f64 {
-        2.0 * self.elastic.plane_strain_modulus() * self.fracture_energy
-            / (self.tensile_strength * self.tensile_strength)
+        match self.softening {
+            Softening::Linear => {
+                2.0 * self.elastic.plane_strain_modulus() * self.fracture_energy
+                    / (self.tensile_strength * self.tensile_strength)
+            }
+            s => self.elastic.plane_strain_modulus() * self.critical_opening() / (self.tensile_strength * s.steepest()),
+        }
     }
 
-    /// Softening modulus `H = h_c f_t² / (2 G_f)` (Pa) for a band `h_c` (m).
+    /// Initial softening modulus (Pa) for a band `h_c` (m): `H = h_c f_t² /
+    /// (2 G_f)` for linear softening, the first branch's `h_c f_t (1 − s_k)
+    /// / (F_k w_c)` for bilinear.
     pub fn softening_modulus(&self, crack_band: f64) -> f64 {
-        crack_band * self.tensile_strength * self.tensile_strength / (2.0 * self.fracture_energy)
+        match self.softening {
+            Softening::Linear => {
+                crack_band * self.tensile_strength * self.tensile_strength / (2.0 * self.fracture_energy)
+            }
+            Softening::Bilinear { kink_stress, kink_opening } => {
+                crack_band * self.tensile_strength * (1.0 - kink_stress) / (kink_opening * self.critical_opening())
+            }
+        }
     }
 
     /// Crack-band width `h_c` (m) of an element of shape `geometry` for a
@@ -393,26 +429,49 @@ impl MohrCoulombRankine {
         }
     }
 
-    /// Failure factor `F = κ / ε_c^f = κ H / f_t` (eq. 2.21); 1 means fully
-    /// softened, 0 before the first crack.
+    /// Failure factor `F = κ h_c / w_c` (eq. 2.21: `κ / ε_c^f`, `κ H / f_t`
+    /// for linear softening), the crack opening over the critical one; 1
+    /// means fully softened, 0 before the first crack.
     pub fn failure_factor(&self, state: &PlasticState) -> f64 {
         if state.crack_band > 0.0 {
-            state.kappa * self.softening_modulus(state.crack_band) / self.tensile_strength
+            match self.softening {
+                Softening::Linear => state.kappa * self.softening_modulus(state.crack_band) / self.tensile_strength,
+                Softening::Bilinear { .. } => state.kappa * state.crack_band / self.critical_opening(),
+            }
         } else {
             0.0
         }
     }
 
     /// Tensile strength and effective softening modulus at `kappa` for a
-    /// band `crack_band`: `(max(f_t − Hκ, 0), H or 0 once fully softened)`.
+    /// band `crack_band`: `(max(f_t − Hκ, 0), H or 0 once fully softened)`
+    /// for linear softening; for bilinear, the branch `κ` is on.
     fn strength(&self, kappa: f64, crack_band: f64) -> (f64, f64) {
         let h = self.softening_modulus(crack_band);
         let s = self.tensile_strength - h * kappa;
+        if let Softening::Bilinear { kink_stress, .. } = self.softening {
+            if s <= kink_stress * self.tensile_strength {
+                let (h2, kappa_max) = self.second_branch(crack_band);
+                return if kappa < kappa_max { (h2 * (kappa_max - kappa), h2) } else { (0.0, 0.0) };
+            }
+        }
         if s > 0.0 {
             (s, h)
         } else {
             (0.0, 0.0)
         }
+    }
+
+    /// The second branch of bilinear softening for a band `crack_band`
+    /// (m): its modulus `h_c f_t s_k / ((1 − F_k) w_c)` (Pa) and the
+    /// fracturing strain `w_c / h_c` at which it reaches zero.
+    fn second_branch(&self, crack_band: f64) -> (f64, f64) {
+        let w_c = self.critical_opening();
+        let (s_k, f_k) = match self.softening {
+            Softening::Bilinear { kink_stress, kink_opening } => (kink_stress, kink_opening),
+            Softening::Linear => (0.0, 0.0),
+        };
+        (crack_band * self.tensile_strength * s_k / ((1.0 - f_k) * w_c), w_c / crack_band)
     }
 
     /// The six yield functions at sorted principal stresses `s` and tensile
@@ -473,12 +532,34 @@ impl MohrCoulombRankine {
     /// functions are worked out once for every set tried.
     fn return_to(&self, t: &Trial, active: u8, exhausted: bool) -> Option<PrincipalReturn> {
         if !exhausted {
-            return self.solve_set(t.s, active, t.kappa, t.sy, t.h, &t.f, t.reject).filter(|r| r.strength >= 0.0);
+            let on_branch = self.solve_set(t.s, active, t.kappa, t.sy, t.h, &t.f, t.reject);
+            let Softening::Bilinear { kink_stress, .. } = self.softening else {
+                return on_branch.filter(|r| r.strength >= 0.0);
+            };
+            let (h2, kappa_max) = self.second_branch(t.band);
+            if t.h == h2 || t.h == 0.0 || active & RANKINE == 0 {
+                // on the second branch already (or exhausted, or no crack)
+                return on_branch.filter(|r| r.strength >= 0.0);
+            }
+            // on the first branch: its return if it stays before the kink,
+            // else the second branch's (the curve is continuous and no
+            // steeper than the elastic stiffness: one of them holds)
+            let kink = kink_stress * self.tensile_strength;
+            if let Some(r) = on_branch.filter(|r| r.strength >= kink * (1.0 - 1e-12)) {
+                return Some(r);
+            }
+            let sy = h2 * (kappa_max - t.kappa);
+            return self
+                .solve_set(t.s, active, t.kappa, sy, h2, &self.yield_functions(t.s, sy), t.reject)
+                .filter(|r| r.strength >= 0.0 && r.strength <= kink * (1.0 + 1e-12));
         }
         if t.h == 0.0 || active & RANKINE == 0 {
             return None; // already exhausted: the linear branch covers it
         }
-        let kappa_max = self.tensile_strength / t.h;
+        let kappa_max = match self.softening {
+            Softening::Linear => self.tensile_strength / t.h,
+            Softening::Bilinear { .. } => self.second_branch(t.band).1,
+        };
         self.solve_set(t.s, active, t.kappa, 0.0, 0.0, &self.yield_functions(t.s, 0.0), t.reject)
             .filter(|r| r.kappa >= kappa_max * (1.0 - 1e-12))
             .map(|mut r| {

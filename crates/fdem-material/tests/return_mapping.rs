@@ -6,7 +6,7 @@
 
 use fdem_material::mohr_coulomb_rankine::{surface, CANDIDATES, RETURN_ORDER};
 use fdem_material::principal::{Order, Spectral};
-use fdem_material::{CrackBand, Elastic, Geometry, MohrCoulombRankine, PlasticState};
+use fdem_material::{CrackBand, Elastic, Geometry, MohrCoulombRankine, PlasticState, Softening};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
@@ -447,6 +447,53 @@ fn softening_dissipates_the_fracture_energy() {
     let expected = law.fracture_energy / state.crack_band;
     assert!((dissipated - expected).abs() < 1e-3 * expected, "{dissipated} vs {expected}");
     assert!(law.failure_factor(&state) > 1.0 && s[0].abs() < 1e-6);
+}
+
+/// Petersson's bilinear curve (`f_t/3` at `0.8 G_f/f_t`, zero at
+/// `3.6 G_f/f_t`) in a band of 0.5 m driven in uniaxial strain past full
+/// softening, with steps of a hundredth of the kink's opening spread over
+/// the band: the stress follows `f_t s(w/w_c)` at the crack opening
+/// `w = κ h_c` within 1% of `f_t` (the steps cross the kink in one go), the
+/// dissipation per unit volume integrates to `G_f / h_c` within 0.1%, and
+/// the stress is zero from `w_c` on.
+#[test]
+fn bilinear_softening_follows_the_curve_and_dissipates_the_fracture_energy() {
+    let e = Elastic::new(30e9, 0.0).unwrap();
+    let (ft, gf) = (1e6, 100.0);
+    let law = MohrCoulombRankine::new(e, 8e6, 40.0 * DEG, 0.0, ft, gf, CrackBand::Oliver)
+        .unwrap()
+        .with_softening(Softening::PETERSSON)
+        .unwrap();
+    let w_c = 3.6 * gf / ft;
+    assert!((law.critical_opening() - w_c).abs() < 1e-12 * w_c);
+    // the steepest branch, 3 f_t / w_c over 0.5 m, against E
+    assert!((law.snap_back_size() - 30e9 * w_c / (3.0 * ft)).abs() < 1e-9);
+    let geometry = Geometry { e1: [0.5, 0.0], e2: [0.0, 0.5] };
+    let mut state = PlasticState::default();
+    let mut s = [0.0; 4];
+    let mut dissipated = 0.0;
+    let d_eps = 0.8 * gf / ft / 0.5 / 100.0;
+    let mut worst: f64 = 0.0;
+    for _ in 0..600 {
+        let trial = law.elastic.trial(s, [d_eps, 0.0, 0.0], 1.0);
+        let u = law.update(s, trial, &mut state, || geometry);
+        dissipated += u.fracture_dissipation + u.plastic_dissipation;
+        s = u.stress;
+        if state.crack_band > 0.0 {
+            let w = state.kappa * state.crack_band;
+            worst = worst.max((s[0] - ft * Softening::PETERSSON.stress(w / w_c)).abs());
+        }
+    }
+    assert!(worst < 1e-2 * ft, "stress off the curve by {worst} Pa");
+    assert!((state.crack_band - 0.5).abs() < 1e-12, "band {}", state.crack_band);
+    let expected = gf / state.crack_band;
+    assert!((dissipated - expected).abs() < 1e-3 * expected, "{dissipated} vs {expected}");
+    assert!(law.failure_factor(&state) > 1.0 && s[0].abs() < 1e-6);
+    // half way along the first branch: F = 0.1 reads as such
+    let mut half = PlasticState { crack_band: 0.5, kappa: 0.1 * w_c / 0.5, ..Default::default() };
+    assert!((law.failure_factor(&half) - 0.1).abs() < 1e-12);
+    half.kappa = 0.0;
+    assert_eq!(law.failure_factor(&half), 0.0);
 }
 
 /// The crack-band rules on a 3-4-5 right triangle: Oliver's band is the

@@ -8,7 +8,7 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use fdem_solver::{CheckpointError, CrackBand, LawSpec, MaterialSpec, RunError};
+use fdem_solver::{CheckpointError, CrackBand, LawSpec, MaterialSpec, RunError, Softening};
 
 /// A `ValueError` with this message.
 pub(crate) fn value_error(msg: impl Into<String>) -> PyErr {
@@ -70,7 +70,8 @@ pub(crate) fn get_f64(d: &Bound<'_, PyDict>, index: usize, key: &str) -> PyResul
 /// A material from the dict the Python layer builds (`Material._kernel_dict`):
 /// `kind`, `rho`, `E`, `nu`, and for `mohr_coulomb_rankine` also `c`, `phi`
 /// and `psi` (degrees; converted to radians here), `ft`, `Gf`, `GII`,
-/// `crack_band`.
+/// `crack_band` and `softening_kink` (`None` for linear softening, else
+/// the kink `(s_k, F_k)` of a bilinear curve).
 pub(crate) fn material_from_dict(index: usize, d: &Bound<'_, PyDict>) -> PyResult<MaterialSpec> {
     let kind: String =
         d.get_item("kind")?.ok_or_else(|| value_error(format!("material {index}: missing kind")))?.extract()?;
@@ -78,6 +79,10 @@ pub(crate) fn material_from_dict(index: usize, d: &Bound<'_, PyDict>) -> PyResul
         "elastic" => LawSpec::Elastic,
         "mohr_coulomb_rankine" => {
             let band: String = d.get_item("crack_band")?.map(|v| v.extract()).transpose()?.unwrap_or("oliver".into());
+            let kink: Option<(f64, f64)> = match d.get_item("softening_kink")? {
+                Some(v) if !v.is_none() => Some(v.extract()?),
+                _ => None,
+            };
             LawSpec::MohrCoulombRankine {
                 cohesion: get_f64(d, index, "c")?,
                 friction: get_f64(d, index, "phi")?.to_radians(),
@@ -93,6 +98,10 @@ pub(crate) fn material_from_dict(index: usize, d: &Bound<'_, PyDict>) -> PyResul
                             "material {index}: crack_band must be 'oliver' or 'equivalent', got '{other}'"
                         )))
                     }
+                },
+                softening: match kink {
+                    None => Softening::Linear,
+                    Some((kink_stress, kink_opening)) => Softening::Bilinear { kink_stress, kink_opening },
                 },
             }
         }

@@ -8,6 +8,7 @@
 //! `fracture.rs` (the check and the topology edits), which calls it.
 
 use fdem_element::Vec2;
+use fdem_material::Softening;
 use rayon::prelude::*;
 
 use crate::fracture::FractureModel;
@@ -35,7 +36,8 @@ pub(crate) fn add_bond_force(force: &mut [Vec2], index_of: &[u32], [a, b]: [u32;
 pub(crate) struct BondSeed {
     /// Tensile strength `t₀` (Pa).
     pub(crate) strength: f64,
-    /// Opening `δ_c` (m) at which the tensile traction reaches zero.
+    /// `2 G_I / t₀` (m), with `G_I` the mode-I energy left: the opening at
+    /// which the tensile traction reaches zero on a straight envelope.
     pub(crate) final_opening: f64,
     /// Shear strength at zero normal stress (Pa).
     pub(crate) cohesion: f64,
@@ -43,6 +45,8 @@ pub(crate) struct BondSeed {
     pub(crate) friction: f64,
     /// Mode-II fracture energy (J/m²).
     pub(crate) shear_energy: f64,
+    /// The kink of the rest of a bilinear curve; `None`: straight.
+    pub(crate) kink: Option<fdem_contact::Kink>,
 }
 
 impl Simulation {
@@ -265,7 +269,11 @@ impl Simulation {
     /// The law of a bond across a crack inserted at node `p`: strength
     /// `t₀ = f_t (1 − F)` (Pa) and final opening `δ_c = 2 G_f (1 − F) / f_t`
     /// (m) in tension, shear strength `c (1 − F)` and `tan φ`, and
-    /// mode-II energy `G_II (1 − F)²`, with `F` and the parameters those of
+    /// mode-II energy `G_II (1 − F)²` for linear softening; for a bilinear
+    /// curve `s`, `t₀ = f_t s(F)`, `c s(F)`, the energies `G_f` and `G_II`
+    /// times the fraction `r(F)` of the curve's area left, `δ_c = 2 G_f
+    /// r(F) / t₀` and the curve's kink if `F` is before it; with `F` and
+    /// the parameters those of
     /// the most softened element around `p`: the bond continues that
     /// element's softening curve, so band and bond together dissipate `G_f`
     /// per unit crack length, and it is no stronger than any element beside
@@ -287,13 +295,26 @@ impl Simulation {
         }
         let material = &self.materials[self.elems.material[e] as usize];
         let law = material.plastic.as_ref()?;
-        let (ft, gf, r) = (law.tensile_strength, law.fracture_energy, 1.0 - f);
+        let (ft, gf) = (law.tensile_strength, law.fracture_energy);
+        if law.softening == Softening::Linear {
+            let r = 1.0 - f;
+            return Some(BondSeed {
+                strength: ft * r,
+                final_opening: 2.0 * gf * r / ft,
+                cohesion: law.cohesion * r,
+                friction: law.friction.tan(),
+                shear_energy: material.shear_fracture_energy * r * r,
+                kink: None,
+            });
+        }
+        let (s, left) = (law.softening.stress(f), law.softening.remaining(f));
         Some(BondSeed {
-            strength: ft * r,
-            final_opening: 2.0 * gf * r / ft,
-            cohesion: law.cohesion * r,
+            strength: ft * s,
+            final_opening: 2.0 * gf * left / (ft * s),
+            cohesion: law.cohesion * s,
             friction: law.friction.tan(),
-            shear_energy: material.shear_fracture_energy * r * r,
+            shear_energy: material.shear_fracture_energy * left,
+            kink: law.softening.kink_after(f).map(|(at, traction)| fdem_contact::Kink { at, traction }),
         })
     }
 }

@@ -61,8 +61,10 @@ pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
 /// Format 6 appends [`Format6`] (the contact dashpots of the node pass),
 /// format 7 then [`Format7`] (the elements' lineage), format 8 then
 /// [`Format8`] (the bonds' offsets and the local damping), format 9 then
-/// [`Format9`] (the bonds' mixed-mode laws and the materials' `G_II`).
-pub const FORMAT_VERSION: u32 = 9;
+/// [`Format9`] (the bonds' mixed-mode laws and the materials' `G_II`),
+/// format 10 then [`Format10`] (the materials' softening curves and the
+/// bonds' kinks).
+pub const FORMAT_VERSION: u32 = 10;
 const HEADER: usize = 40;
 
 /// Why a checkpoint could not be written or read.
@@ -372,6 +374,35 @@ impl Format9 {
     }
 }
 
+/// What format 10 added, written after [`Format9`]: each material's
+/// softening curve ([`MohrCoulombRankine::softening`](fdem_material::MohrCoulombRankine::softening);
+/// `Linear` for a material without a plastic law) and each bond's kink
+/// ([`MixedMode::kink`](fdem_contact::MixedMode::kink); `None` for a
+/// straight envelope or an isotropic bond), in the order of the bonds. A
+/// file of an older format restores linear softening and straight
+/// envelopes, the only ones older builds had.
+#[derive(Serialize, Deserialize)]
+struct Format10 {
+    softening: Vec<fdem_material::Softening>,
+    kinks: Vec<Option<fdem_contact::Kink>>,
+}
+
+impl Format10 {
+    fn of(s: &Simulation) -> Self {
+        Format10 {
+            softening: s
+                .materials
+                .iter()
+                .map(|m| m.plastic.as_ref().map_or_else(Default::default, |l| l.softening))
+                .collect(),
+            kinks: s
+                .fracture
+                .as_ref()
+                .map_or_else(Vec::new, |f| f.bonds.iter().map(|b| b.mode.and_then(|m| m.kink)).collect()),
+        }
+    }
+}
+
 fn le_u32(b: &[u8]) -> u32 {
     u32::from_le_bytes([b[0], b[1], b[2], b[3]])
 }
@@ -396,6 +427,7 @@ impl Simulation {
         state.extend(postcard::to_stdvec(&Format7::of(self)).expect("format-7 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format8::of(self)).expect("format-8 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format9::of(self)).expect("format-9 data is serialisable"));
+        state.extend(postcard::to_stdvec(&Format10::of(self)).expect("format-10 data is serialisable"));
         let mut out = Vec::with_capacity(HEADER + state.len() + user.len());
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -492,6 +524,12 @@ impl Simulation {
         } else {
             (None, rest)
         };
+        let (curves, rest) = if version >= 10 {
+            let (o, rest) = postcard::take_from_bytes::<Format10>(rest).map_err(decode)?;
+            (Some(o), rest)
+        } else {
+            (None, rest)
+        };
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
         }
@@ -526,6 +564,31 @@ impl Simulation {
             None => {
                 for m in &mut owned.materials {
                     m.shear_fracture_energy = m.plastic.as_ref().map_or(0.0, |l| l.fracture_energy);
+                }
+            }
+        }
+        if let Some(Format10 { softening, kinks }) = curves {
+            if softening.len() != owned.materials.len() {
+                return Err(CheckpointError::Invalid(
+                    "the materials' softening curves do not match the materials".into(),
+                ));
+            }
+            for (m, s) in owned.materials.iter_mut().zip(softening) {
+                if let Some(law) = m.plastic.as_mut() {
+                    *law = law.with_softening(s).map_err(|e| CheckpointError::Invalid(e.to_string()))?;
+                }
+            }
+            let bonds = owned.fracture.as_mut().map_or(&mut [][..], |f| &mut f.bonds[..]);
+            let inside = |v: f64| v > 0.0 && v < 1.0;
+            if kinks.len() != bonds.len()
+                || kinks.iter().flatten().any(|k| !(inside(k.at) && inside(k.traction)))
+                || bonds.iter().zip(&kinks).any(|(b, k)| k.is_some() && b.mode.is_none())
+            {
+                return Err(CheckpointError::Invalid("the bonds' kinks do not match the bonds".into()));
+            }
+            for (b, k) in bonds.iter_mut().zip(kinks) {
+                if let Some(m) = b.mode.as_mut() {
+                    m.kink = k;
                 }
             }
         }

@@ -327,6 +327,7 @@ impl Simulation {
                                 friction: seed.friction,
                                 shear_energy: seed.shear_energy,
                                 damage: 0.0,
+                                kink: seed.kink,
                             }),
                         });
                     }
@@ -584,6 +585,7 @@ mod tests {
             fracture_energy: 70.0,
             shear_fracture_energy: 70.0,
             crack_band: CrackBand::Oliver,
+            softening: fdem_material::Softening::Linear,
         };
         ModelSpec {
             points,

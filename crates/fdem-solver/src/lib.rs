@@ -56,7 +56,7 @@ pub use energy::Energies;
 pub use error::{RunError, SetupError};
 pub use fdem_contact::{Bond, MixedMode};
 pub use fdem_fracture::FractureParams;
-pub use fdem_material::{CrackBand, PlasticState};
+pub use fdem_material::{CrackBand, PlasticState, Softening};
 pub use fdem_mesh::validate as validate_mesh;
 pub use fracture::InsertionAudit;
 

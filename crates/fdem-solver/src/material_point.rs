@@ -157,6 +157,7 @@ mod tests {
                 fracture_energy: 50.0,
                 shear_fracture_energy: 50.0,
                 crack_band: CrackBand::Oliver,
+                softening: fdem_material::Softening::Linear,
             },
         }
     }

@@ -1,6 +1,6 @@
 //! The description of a model as the solver receives it.
 
-use fdem_material::CrackBand;
+use fdem_material::{CrackBand, Softening};
 
 use fdem_element::Vec2;
 
@@ -45,6 +45,8 @@ pub enum LawSpec {
         shear_fracture_energy: f64,
         /// Crack-band rule.
         crack_band: CrackBand,
+        /// Shape of the softening curve (linear: the paper's).
+        softening: Softening,
     },
 }
 
@@ -64,6 +66,7 @@ impl LawSpec {
                 tensile_strength,
                 fracture_energy,
                 crack_band,
+                softening,
                 ..
             } => fdem_material::MohrCoulombRankine::new(
                 elastic,
@@ -74,6 +77,7 @@ impl LawSpec {
                 fracture_energy,
                 crack_band,
             )
+            .and_then(|law| law.with_softening(softening))
             .map(Some),
         }
     }

@@ -174,6 +174,14 @@ fn format9_len(sim: &Simulation, materials: usize) -> usize {
     1 + varint(materials) + 8 * materials
 }
 
+/// Bytes of the format-10 block of a run with linear softening and no
+/// kinked bonds: each material's curve (a varint count and a one-byte
+/// variant each) and each bond's kink (a varint count and a one-byte
+/// `None` each).
+fn format10_len(sim: &Simulation, materials: usize) -> usize {
+    varint(materials) + materials + varint(sim.bonds().len()) + sim.bonds().len()
+}
+
 /// The plate with contact on its own surface (a dashpot of damping ratio
 /// 0.1).
 fn plate_with_contact(n: usize) -> ModelSpec {
@@ -207,7 +215,8 @@ fn a_format_1_file_still_reads_with_physical_masses() {
             + format6_len(0)
             + format7_len(&a)
             + format8_len(&a)
-            + format9_len(&a, 1),
+            + format9_len(&a, 1)
+            + format10_len(&a, 1),
     );
     let (mut b, user) = Simulation::from_checkpoint_bytes(&v1, 1).unwrap();
     assert_eq!(user, b"meta");
@@ -229,7 +238,12 @@ fn a_format_2_file_with_contact_reads_without_corner_contacts() {
     // two lists of nb: an empty memory is 22 bytes (facet u32::MAX as a
     // 5-byte varint, two f64, `None`), an empty contact 70 (facet, 7 f64,
     // a bool); then the format-4, format-6 and format-7 blocks
-    let blocks = format4_len(a.n_elements()) + format6_len(nb) + format7_len(&a) + format8_len(&a) + format9_len(&a, 1);
+    let blocks = format4_len(a.n_elements())
+        + format6_len(nb)
+        + format7_len(&a)
+        + format8_len(&a)
+        + format9_len(&a, 1)
+        + format10_len(&a, 1);
     let v2 = downgrade(&v3, 2, 2 * varint(nb) + nb * (22 + 70) + blocks);
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v2, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v3, "format 2 read back differs");
@@ -254,6 +268,7 @@ fn a_format_4_file_keeps_its_crack_directions() {
         fracture_energy: 10.0,
         shear_fracture_energy: 10.0,
         crack_band: CrackBand::Oliver,
+        softening: fdem_solver::Softening::Linear,
     };
     let top = (n * (n + 1)) as u32;
     for i in top..=top + n as u32 {
@@ -268,7 +283,11 @@ fn a_format_4_file_keeps_its_crack_directions() {
     assert!(codes.iter().filter(|&&c| c != 0.0).count() >= cracked);
     // the same bytes marked as format 4: each code is read as an angle
     let v6 = a.checkpoint_bytes(b"");
-    let v4 = downgrade(&v6, 4, format6_len(0) + format7_len(&a) + format8_len(&a) + format9_len(&a, 1));
+    let v4 = downgrade(
+        &v6,
+        4,
+        format6_len(0) + format7_len(&a) + format8_len(&a) + format9_len(&a, 1) + format10_len(&a, 1),
+    );
     let (b, _) = Simulation::from_checkpoint_bytes(&v4, 1).unwrap();
     let pi = std::f64::consts::PI;
     for (e, s) in b.plastic_states().iter().enumerate() {
@@ -287,7 +306,11 @@ fn a_format_5_file_reads_without_its_dashpots_and_a_format_6_file_with_them() {
     // tests/test_caving_resume.py).
     let mut a = Simulation::new(plate_with_contact(6), 1).unwrap();
     let v6 = a.checkpoint_bytes(b"");
-    let v5 = downgrade(&v6, 5, format6_len(4 * 6) + format7_len(&a) + format8_len(&a) + format9_len(&a, 1));
+    let v5 = downgrade(
+        &v6,
+        5,
+        format6_len(4 * 6) + format7_len(&a) + format8_len(&a) + format9_len(&a, 1) + format10_len(&a, 1),
+    );
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v5, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v6, "format 5 read back differs");
     a.step(40).unwrap();
@@ -328,6 +351,7 @@ fn bonded_bar() -> ModelSpec {
             fracture_energy: 70.0,
             shear_fracture_energy: 70.0,
             crack_band: CrackBand::Oliver,
+            softening: fdem_solver::Softening::Linear,
         },
     };
     let mut constraints = Vec::new();
@@ -405,7 +429,7 @@ fn a_format_6_file_reads_without_lineage_and_a_bad_lineage_is_refused() {
     let v7 = a.checkpoint_bytes(b"");
     let m = a.n_elements();
     assert!(a.element_parents().iter().enumerate().all(|(e, &p)| p as usize == e));
-    let v6 = downgrade(&v7, 6, format7_len(&a) + format8_len(&a) + format9_len(&a, 1));
+    let v6 = downgrade(&v7, 6, format7_len(&a) + format8_len(&a) + format9_len(&a, 1) + format10_len(&a, 1));
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v6, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v7, "format 6 read back differs");
     // nothing to place: every element is one of the model's
@@ -414,7 +438,7 @@ fn a_format_6_file_reads_without_lineage_and_a_bad_lineage_is_refused() {
     // of the state, a one-byte varint here)
     let s_len = u64::from_le_bytes(v7[16..24].try_into().unwrap()) as usize;
     let mut bad = v7.clone();
-    let last = 40 + s_len - 1 - format8_len(&a) - format9_len(&a, 1);
+    let last = 40 + s_len - 1 - format8_len(&a) - format9_len(&a, 1) - format10_len(&a, 1);
     assert_eq!(bad[last] as usize, m - 1);
     bad[last] = m as u8;
     let crc = crc32fast::hash(&bad[40..]);
@@ -433,14 +457,14 @@ fn a_format_7_file_reads_with_slack_bonds_and_bad_offsets_are_refused() {
     a.step(10).unwrap();
     let v8 = a.checkpoint_bytes(b"");
     assert!(a.bonds().is_empty());
-    let v7 = downgrade(&v8, 7, format8_len(&a) + format9_len(&a, 1));
+    let v7 = downgrade(&v8, 7, format8_len(&a) + format9_len(&a, 1) + format10_len(&a, 1));
     let (b, _) = Simulation::from_checkpoint_bytes(&v7, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v8, "format 7 read back differs");
     // one offset where there is no bond: the count (the byte before the
     // local damping's f64 and the two empty lists) made 1 and two f64 put
     // after it
     let s_len = u64::from_le_bytes(v8[16..24].try_into().unwrap()) as usize;
-    let f9 = format9_len(&a, 1);
+    let f9 = format9_len(&a, 1) + format10_len(&a, 1);
     let mut state = v8[40..40 + s_len - f9 - 10].to_vec();
     *state.last_mut().unwrap() = 1;
     state.extend_from_slice(&[0u8; 16 + 8 + 2]);
@@ -483,8 +507,9 @@ fn a_format_8_file_reads_with_isotropic_bonds_and_bad_bond_laws_are_refused() {
         assert!(dn > 0.0, "bond {:?} closed by {dn} m along its normal", bond.nodes);
     }
     let v9 = a.checkpoint_bytes(b"");
+    let f10 = format10_len(&a, 2);
     let f9 = varint(nb) + nb * (1 + 6 * 8) + varint(2) + 2 * 8;
-    let v8 = downgrade(&v9, 8, f9);
+    let v8 = downgrade(&v9, 8, f9 + f10);
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v8, 1).unwrap();
     assert!(b.bonds().iter().all(|b| b.mode.is_none()), "a format-8 file's bonds are isotropic");
     assert_eq!(b.bonds().len(), nb);
@@ -495,7 +520,7 @@ fn a_format_8_file_reads_with_isotropic_bonds_and_bad_bond_laws_are_refused() {
     assert!(b.energies().residual().is_finite());
     // the last bond's damage made 2
     let s_len = u64::from_le_bytes(v9[16..24].try_into().unwrap()) as usize;
-    let at = 40 + s_len - (varint(2) + 2 * 8) - 8;
+    let at = 40 + s_len - f10 - (varint(2) + 2 * 8) - 8;
     let mut bad = v9.clone();
     bad[at..at + 8].copy_from_slice(&2.0f64.to_le_bytes());
     let crc = crc32fast::hash(&bad[40..]);
@@ -503,4 +528,58 @@ fn a_format_8_file_reads_with_isotropic_bonds_and_bad_bond_laws_are_refused() {
     reseal(&mut bad);
     let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
     assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("mixed-mode")), "{e}");
+}
+
+/// Format 10 appends each material's softening curve and each bond's
+/// kink. The bonded bar with Petersson's bilinear curve: its young bonds
+/// carry the rest of the curve's kink, a checkpoint keeps curves and
+/// kinks, and the restored run continues bit for bit. A format-9 file
+/// (the block cut off) reads with linear softening and straight bonds,
+/// the only ones older builds had; a kink outside (0, 1) is refused.
+#[test]
+fn bilinear_curves_and_kinks_survive_a_restart_and_a_format_9_file_reads_linear() {
+    let mut spec = bonded_bar();
+    for m in &mut spec.materials {
+        if let LawSpec::MohrCoulombRankine { softening, .. } = &mut m.law {
+            *softening = fdem_solver::Softening::PETERSSON;
+        }
+    }
+    let mut a = Simulation::new(spec, 1).unwrap();
+    while a.bonds().is_empty() {
+        a.step(10).unwrap();
+        assert!(a.steps() < 5000, "no crack opened with its bond");
+    }
+    let nb = a.bonds().len();
+    let kinked = a.bonds().iter().filter(|b| b.mode.and_then(|m| m.kink).is_some()).count();
+    assert!(kinked > 0, "no bond made before the kink has one");
+    let v10 = a.checkpoint_bytes(b"");
+    let (mut b, _) = Simulation::from_checkpoint_bytes(&v10, 2).unwrap();
+    assert!(b.checkpoint_bytes(b"") == v10, "read back differs");
+    a.step(300).unwrap();
+    b.step(300).unwrap();
+    assert!(a.checkpoint_bytes(b"") == b.checkpoint_bytes(b""), "the restored run went its own way");
+    // the format-10 block: two materials (variant byte and two f64 each),
+    // then each bond's option tag and, for a kink, two f64
+    let f10 = varint(2) + 2 * 17 + varint(nb) + nb + 16 * kinked;
+    let v9 = downgrade(&v10, 9, f10);
+    let (c, _) = Simulation::from_checkpoint_bytes(&v9, 1).unwrap();
+    assert!(c.bonds().iter().all(|b| b.mode.is_some_and(|m| m.kink.is_none())));
+    // the last bond's kink made 2 in its traction (the last f64 of the state)
+    assert!(c.bonds().len() == nb && v10_last_kinked(&v10, nb, kinked));
+    let s_len = u64::from_le_bytes(v10[16..24].try_into().unwrap()) as usize;
+    let at = 40 + s_len - 8;
+    let mut bad = v10.clone();
+    bad[at..at + 8].copy_from_slice(&2.0f64.to_le_bytes());
+    let crc = crc32fast::hash(&bad[40..]);
+    bad[32..36].copy_from_slice(&crc.to_le_bytes());
+    reseal(&mut bad);
+    let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
+    assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("kinks")), "{e}");
+}
+
+/// Whether the last bond in checkpoint `v` (with `nb` bonds, `kinked` of
+/// them with a kink) has one: the option tag 17 bytes before the end is 1.
+fn v10_last_kinked(v: &[u8], nb: usize, kinked: usize) -> bool {
+    let s_len = u64::from_le_bytes(v[16..24].try_into().unwrap()) as usize;
+    nb > 0 && kinked > 0 && v[40 + s_len - 17] == 1
 }

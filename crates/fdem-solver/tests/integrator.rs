@@ -167,6 +167,7 @@ fn expanding(points: Vec<[f64; 2]>, triangles: Vec<[u64; 3]>, check_every: Optio
                 fracture_energy: 10.0,
                 shear_fracture_energy: 10.0,
                 crack_band: fdem_solver::CrackBand::Oliver,
+                softening: fdem_solver::Softening::Linear,
             },
         }],
         element_material: vec![0; m],

@@ -29,6 +29,7 @@ pub fn impact(nx: usize, ny: usize) -> ModelSpec {
             fracture_energy: 30.0,
             shear_fracture_energy: 30.0,
             crack_band: CrackBand::Oliver,
+            softening: fdem_solver::Softening::Linear,
         },
     };
     let platen = MaterialSpec { density: 2700.0, young, poisson: 0.25, law: LawSpec::Elastic };
