@@ -233,7 +233,7 @@ impl Simulation {
             *r = bond.update(x[a as usize], x[b as usize]);
         });
         let (mut dissipated, mut elastic) = (0.0, 0.0);
-        let force = &mut self.contact_force;
+        let force = &mut self.node_forces.contact_force;
         let mut broken = false;
         for (bond, r) in fr.bonds.iter().zip(responses.iter()) {
             dissipated += r.dissipated;
@@ -262,7 +262,12 @@ impl Simulation {
         let (x, index_of) = (&self.nodes.x, &self.surface.index_of);
         for bond in &fr.bonds {
             let [a, b] = bond.nodes;
-            add_bond_force(&mut self.contact_force, index_of, bond.nodes, bond.force(x[a as usize], x[b as usize]));
+            add_bond_force(
+                &mut self.node_forces.contact_force,
+                index_of,
+                bond.nodes,
+                bond.force(x[a as usize], x[b as usize]),
+            );
         }
     }
 

@@ -35,14 +35,16 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::clock::Clock;
-use crate::contact::ContactModel;
+use crate::contact::{ContactModel, NodeForces};
 use crate::energy::EnergyLedger;
+use crate::excavation::Staging;
 use crate::fracture::FractureModel;
-use crate::loads::{Amplitude, Constraint, PressureLoad};
+use crate::loads::{Amplitude, Constraint, Loads, PressureLoad};
 use crate::model::{ExcavationStage, Settings};
 use crate::passes::{Material, PressureFacet};
 use crate::renumber::Layout;
-use crate::simulation::{ContactStats, Elements, Nodes, PhaseTimes, Simulation};
+use crate::simulation::{ContactStats, Diagnostics, Elements, Nodes, PhaseTimes, Simulation};
+use crate::stable_step::Frequencies;
 use fdem_contact::{ContactState, Dashpot, NodeContact, Surface};
 use fdem_element::Vec2;
 use fdem_mesh::Csr;
@@ -119,9 +121,12 @@ impl std::fmt::Display for CheckpointError {
 impl std::error::Error for CheckpointError {}
 
 /// Generates the borrowed (written) and owned (read) forms of the saved state
-/// from one field list, so the two can never disagree on order or type.
+/// from one field list, so the two can never disagree on order or type. Each
+/// entry names the saved field, its type and where it lives in a
+/// [`Simulation`] (postcard writes fields in order with no names, so the
+/// layout is the list's, whichever part of the simulation owns a field).
 macro_rules! saved_state {
-    ($($field:ident : $ty:ty),* $(,)?) => {
+    ($($field:ident : $ty:ty => $($path:ident).+),* $(,)?) => {
         #[derive(Serialize)]
         struct StateRef<'a> {
             version: &'a str,
@@ -136,73 +141,96 @@ macro_rules! saved_state {
         }
 
         fn state_ref(s: &Simulation) -> StateRef<'_> {
-            StateRef { version: env!("CARGO_PKG_VERSION"), $($field: &s.$field,)* }
-        }
-
-        fn assemble(o: StateOwned, pool: Arc<rayon::ThreadPool>) -> Simulation {
-            let n = o.nodes.x.len();
-            let m = o.elems.conn.len();
-            let mut sim = Simulation {
-                $($field: o.$field,)*
-                phase_times: PhaseTimes::default(),
-                contact_omega: Vec::new(),
-                omega_carry: Default::default(),
-                released: Vec::new(),
-                release_force: Vec::new(),
-                contact_damped: Vec::new(),
-                dashpot_force: Vec::new(),
-                pred_v: Vec::new(),
-                pred_f: Vec::new(),
-                layout: Layout::default(),
-                pool,
-            };
-            // derived data, not saved
-            sim.surface.derive(&sim.nodes.x0);
-            if let Some(c) = sim.contact.as_mut() {
-                for o in c.out.iter_mut().chain(c.corner_out.iter_mut()) {
-                    o.locate(&sim.surface);
-                }
-                c.mark_busy();
-            }
-            // per-chunk partial sums are sized, never resized, by the passes
-            sim.ledger.size_partials(n, m);
-            if let Some(c) = sim.contact.as_mut() {
-                c.size_scratch(&sim.surface);
-            }
-            sim
+            StateRef { version: env!("CARGO_PKG_VERSION"), $($field: &s.$($path).+,)* }
         }
     };
 }
 
 saved_state! {
-    nodes: Nodes,
-    elems: Elements,
-    materials: Vec<Material>,
-    node_elems: Csr,
-    constraints: Vec<Constraint>,
-    amplitudes: Vec<Amplitude>,
-    amplitude_values: Vec<f64>,
-    pressure_loads: Vec<PressureLoad>,
-    ancestor: Vec<u32>,
-    surface: Surface,
-    pressure: Vec<PressureFacet>,
-    pressure_force: Vec<Vec2>,
-    contact_force: Vec<Vec2>,
-    contact_damping_force: Vec<Vec2>,
-    contact: Option<ContactModel>,
-    fracture: Option<FractureModel>,
-    stages: Vec<ExcavationStage>,
-    next_stage: usize,
-    elastic_stage: bool,
-    contact_stats: ContactStats,
-    omega: Vec<f64>,
-    gravity: Vec2,
-    settings: Settings,
+    nodes: Nodes => nodes,
+    elems: Elements => elems,
+    materials: Vec<Material> => materials,
+    node_elems: Csr => node_elems,
+    constraints: Vec<Constraint> => loads.constraints,
+    amplitudes: Vec<Amplitude> => loads.amplitudes,
+    amplitude_values: Vec<f64> => loads.amplitude_values,
+    pressure_loads: Vec<PressureLoad> => loads.pressure_loads,
+    ancestor: Vec<u32> => ancestor,
+    surface: Surface => surface,
+    pressure: Vec<PressureFacet> => loads.pressure,
+    pressure_force: Vec<Vec2> => loads.pressure_force,
+    contact_force: Vec<Vec2> => node_forces.contact_force,
+    contact_damping_force: Vec<Vec2> => node_forces.contact_damping_force,
+    contact: Option<ContactModel> => contact,
+    fracture: Option<FractureModel> => fracture,
+    stages: Vec<ExcavationStage> => staging.stages,
+    next_stage: usize => staging.next_stage,
+    elastic_stage: bool => staging.elastic_stage,
+    contact_stats: ContactStats => diagnostics.contact_stats,
+    omega: Vec<f64> => frequencies.omega,
+    gravity: Vec2 => loads.gravity,
+    settings: Settings => settings,
     // written as its five fields (`Clock`): time, step, dt, dt_prev,
     // dt_critical
-    clock: Clock,
+    clock: Clock => clock,
     // written as the account and the held energy (`EnergyLedger`)
-    ledger: EnergyLedger,
+    ledger: EnergyLedger => ledger,
+}
+
+/// The simulation a decoded state describes, on `pool`: the saved fields
+/// put back into the parts that own them (the list above says where), the
+/// scratch empty, and the data derived from the saved fields worked out.
+fn assemble(o: StateOwned, pool: Arc<rayon::ThreadPool>) -> Simulation {
+    let n = o.nodes.x.len();
+    let m = o.elems.conn.len();
+    let mut sim = Simulation {
+        nodes: o.nodes,
+        elems: o.elems,
+        materials: o.materials,
+        node_elems: o.node_elems,
+        loads: Loads {
+            constraints: o.constraints,
+            amplitudes: o.amplitudes,
+            amplitude_values: o.amplitude_values,
+            pressure_loads: o.pressure_loads,
+            pressure: o.pressure,
+            pressure_force: o.pressure_force,
+            gravity: o.gravity,
+            released: Vec::new(),
+            release_force: Vec::new(),
+        },
+        ancestor: o.ancestor,
+        surface: o.surface,
+        node_forces: NodeForces {
+            contact_force: o.contact_force,
+            contact_damping_force: o.contact_damping_force,
+            ..Default::default()
+        },
+        contact: o.contact,
+        fracture: o.fracture,
+        staging: Staging { stages: o.stages, next_stage: o.next_stage, elastic_stage: o.elastic_stage },
+        diagnostics: Diagnostics { contact_stats: o.contact_stats, phase_times: PhaseTimes::default() },
+        frequencies: Frequencies { omega: o.omega, ..Default::default() },
+        settings: o.settings,
+        clock: o.clock,
+        ledger: o.ledger,
+        layout: Layout::default(),
+        pool,
+    };
+    // derived data, not saved
+    sim.surface.derive(&sim.nodes.x0);
+    if let Some(c) = sim.contact.as_mut() {
+        for o in c.out.iter_mut().chain(c.corner_out.iter_mut()) {
+            o.locate(&sim.surface);
+        }
+        c.mark_busy();
+    }
+    // per-chunk partial sums are sized, never resized, by the passes
+    sim.ledger.size_partials(n, m);
+    if let Some(c) = sim.contact.as_mut() {
+        c.size_scratch(&sim.surface);
+    }
+    sim
 }
 
 /// What format 2 added, written after the format-1 state (so a format-1
@@ -346,8 +374,8 @@ impl Format8 {
         Format8 {
             offsets: s.fracture.as_ref().map_or_else(Vec::new, |f| f.bonds.iter().map(|b| b.offset).collect()),
             local_damping: s.settings.local_damping,
-            stage_ramps: s.stages.iter().map(|st| st.ramp).collect(),
-            released: s.released.clone(),
+            stage_ramps: s.staging.stages.iter().map(|st| st.ramp).collect(),
+            released: s.loads.released.clone(),
         }
     }
 }
@@ -655,7 +683,7 @@ impl Simulation {
             .map_err(|e| CheckpointError::Io(format!("cannot start {threads} threads: {e}")))?;
         let mut sim = assemble(owned, Arc::new(pool));
         sim.layout = renumbering.layout;
-        sim.released = released;
+        sim.loads.released = released;
         sim.update_release();
         if let Some(c) = sim.contact.as_mut() {
             if let Some(saved) = dashpots {
@@ -665,7 +693,7 @@ impl Simulation {
                     }
                 }
             }
-            sim.contact_damped = vec![0; sim.contact_force.len()];
+            sim.node_forces.contact_damped = vec![0; sim.node_forces.contact_force.len()];
         }
         // the assembly again, which also finds the damped nodes, and the
         // bonds' forces on top, as the step added them: the same forces,

@@ -12,6 +12,26 @@ use crate::error::SetupError;
 use crate::model::ContactSpec;
 use crate::NONE;
 
+/// The forces the node pass takes from contact and bonds, per boundary
+/// node, and its dashpot scratch (docs/contact.md, "Dashpots on the
+/// predicted velocities").
+#[derive(Default)]
+pub(crate) struct NodeForces {
+    /// Contact forces per boundary node at `xⁿ` (N); empty without contact.
+    pub contact_force: Vec<Vec2>,
+    /// Their contact-dashpot parts (N), whose work is the contact damping.
+    pub contact_damping_force: Vec<Vec2>,
+    /// Per boundary node: how many contact dashpots act on it (set by the
+    /// contact assembly; derived, not saved).
+    pub contact_damped: Vec<u16>,
+    /// Scratch of the node pass with dashpots: the dashpot forces per
+    /// boundary node (N), and per node the predicted velocity (m/s) and
+    /// net force without the dashpots (N).
+    pub dashpot_force: Vec<Vec2>,
+    pub pred_v: Vec<Vec2>,
+    pub pred_f: Vec<Vec2>,
+}
+
 /// Damping ratio of an interface's dashpot from which a penalty contact
 /// no longer rattles at the stability bound. Two bars meeting at 1 m/s
 /// with a node spring of 20 E or 100 E, at twice the default step

@@ -15,6 +15,17 @@ use crate::error::SetupError;
 use crate::simulation::Simulation;
 use crate::{Energies, ExcavationStage};
 
+/// The excavation stages of a run and where it stands in them.
+#[derive(Default)]
+pub(crate) struct Staging {
+    /// Excavation stages in time order.
+    pub stages: Vec<ExcavationStage>,
+    /// The next one to run.
+    pub next_stage: usize,
+    /// Elastic stage: plastic laws and crack insertion off (equilibrium).
+    pub elastic_stage: bool,
+}
+
 impl Simulation {
     /// Removes `elements` from the model now (ids; ones already removed are
     /// skipped) and returns how many were removed. With `descendants`, also
@@ -112,7 +123,7 @@ impl Simulation {
                     release.forces.push(f);
                 }
             }
-            self.released.push(release);
+            self.loads.released.push(release);
             self.update_release();
         }
         self.keep_whole_step_velocities(&v_n);
@@ -143,14 +154,16 @@ impl Simulation {
     /// any ran.
     pub(crate) fn excavate_due(&mut self) -> bool {
         let mut ran = false;
-        while self.next_stage < self.stages.len() && self.stages[self.next_stage].time <= self.clock.time() {
-            let stage = std::mem::take(&mut self.stages[self.next_stage].elements);
+        while self.staging.next_stage < self.staging.stages.len()
+            && self.staging.stages[self.staging.next_stage].time <= self.clock.time()
+        {
+            let stage = std::mem::take(&mut self.staging.stages[self.staging.next_stage].elements);
             // ids were checked at set-up; a stage removes the pieces
             // cracks have cut from its elements too
-            let ramp = self.stages[self.next_stage].ramp;
+            let ramp = self.staging.stages[self.staging.next_stage].ramp;
             let _ = self.deactivate_gradually(&stage, true, ramp);
-            self.stages[self.next_stage].elements = stage;
-            self.next_stage += 1;
+            self.staging.stages[self.staging.next_stage].elements = stage;
+            self.staging.next_stage += 1;
             ran = true;
         }
         ran
@@ -158,7 +171,7 @@ impl Simulation {
 
     /// The excavation stages, and how many have run.
     pub fn stages(&self) -> (&[ExcavationStage], usize) {
-        (&self.stages, self.next_stage)
+        (&self.staging.stages, self.staging.next_stage)
     }
 
     /// Starts the clock again at `t = 0` from the current state (after an
@@ -185,9 +198,11 @@ impl Simulation {
             ..Energies::default()
         };
         self.clock.restart();
-        self.next_stage = 0;
-        while self.next_stage < self.stages.len() && self.stages[self.next_stage].time < 0.0 {
-            self.next_stage += 1;
+        self.staging.next_stage = 0;
+        while self.staging.next_stage < self.staging.stages.len()
+            && self.staging.stages[self.staging.next_stage].time < 0.0
+        {
+            self.staging.next_stage += 1;
         }
     }
 

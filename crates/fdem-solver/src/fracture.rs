@@ -260,7 +260,11 @@ impl Simulation {
             return false;
         }
         let clock = std::time::Instant::now();
-        let inner = (self.phase_times.surface, self.phase_times.broad_phase, self.phase_times.time_step);
+        let inner = (
+            self.diagnostics.phase_times.surface,
+            self.diagnostics.phase_times.broad_phase,
+            self.diagnostics.phase_times.time_step,
+        );
         let before = self.mass_and_momentum();
         let held = |e: &crate::energy::Energies| e.contact_elastic + e.cohesive_elastic;
         let held_before = held(&self.ledger.account);
@@ -351,7 +355,7 @@ impl Simulation {
         self.ledger.account.resurfacing += held_before - held(&self.ledger.account);
         self.update_time_step_for(Some(&touched), true);
         // the rebuild's surface forces and stable step count as topology
-        let pt = &mut self.phase_times;
+        let pt = &mut self.diagnostics.phase_times;
         (pt.surface, pt.broad_phase, pt.time_step) = inner;
         pt.topology += clock.elapsed().as_secs_f64();
         self.remember_factors(&keep);
@@ -420,7 +424,7 @@ impl Simulation {
                     // a node on a supported edge is supported alike
                     let (ba, bb) = (self.nodes.bc[a], self.nodes.bc[b]);
                     let same = ba != NO_BC && bb != NO_BC && {
-                        let (ca, cb) = (&self.constraints[ba as usize], &self.constraints[bb as usize]);
+                        let (ca, cb) = (&self.loads.constraints[ba as usize], &self.loads.constraints[bb as usize]);
                         ca.fixed == cb.fixed && ca.value == cb.value && ca.amplitude == cb.amplitude
                     };
                     self.push_constraint_copy(if same { ba } else { NO_BC }, id);
@@ -487,7 +491,7 @@ impl Simulation {
                     c.facet_laws.insert(ancestor_pair(anc, m, r), law);
                 }
             }
-            for load in &self.pressure_loads {
+            for load in &self.loads.pressure_loads {
                 let [a, b] = load.nodes;
                 if (a.min(b), a.max(b)) == old {
                     new_loads.push(PressureLoad { nodes: [aq, m], ..*load });
@@ -495,7 +499,7 @@ impl Simulation {
                 }
             }
         }
-        self.pressure_loads.extend(new_loads);
+        self.loads.pressure_loads.extend(new_loads);
         if let Some(c) = &mut self.contact {
             for &[p, w] in &edits.crack_faces {
                 c.facet_laws.insert(ancestor_pair(anc, p, w), c.crack_law);
@@ -510,10 +514,10 @@ impl Simulation {
         if b == NO_BC {
             self.nodes.bc.push(NO_BC);
         } else {
-            let mut c = self.constraints[b as usize];
+            let mut c = self.loads.constraints[b as usize];
             c.node = id;
-            self.nodes.bc.push(self.constraints.len() as u32);
-            self.constraints.push(c);
+            self.nodes.bc.push(self.loads.constraints.len() as u32);
+            self.loads.constraints.push(c);
         }
     }
 }
@@ -699,12 +703,12 @@ mod tests {
         let mut sim = Simulation::new(plate_under_a_block(), 1).unwrap();
         sim.set_elastic_stage(true);
         for _ in 0..100 {
-            if sim.contact_stats.contacts >= 4 {
+            if sim.diagnostics.contact_stats.contacts >= 4 {
                 break;
             }
             sim.step(1).unwrap();
         }
-        assert!(sim.contact_stats.contacts >= 4, "{} contacts", sim.contact_stats.contacts);
+        assert!(sim.diagnostics.contact_stats.contacts >= 4, "{} contacts", sim.diagnostics.contact_stats.contacts);
         sim.set_elastic_stage(false);
         soften_row(&mut sim);
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs());
@@ -717,12 +721,12 @@ mod tests {
             let c = sim.contact.as_ref().unwrap();
             kept += c.partials.iter().map(|p| p.kept).sum::<u64>();
             let after = (c.states.clone(), c.corner_states.clone(), c.out.clone(), c.corner_out.clone());
-            let (contacts, stored) = (sim.contact_stats.contacts, sim.ledger.account.contact_elastic);
+            let (contacts, stored) = (sim.diagnostics.contact_stats.contacts, sim.ledger.account.contact_elastic);
             // every node evaluated again at the same positions, without slip
             sim.refresh_forces();
             let c = sim.contact.as_ref().unwrap();
             assert_eq!(c.partials.iter().map(|p| p.kept).sum::<u64>(), 0);
-            assert_eq!(sim.contact_stats.contacts, contacts, "after change {changes}");
+            assert_eq!(sim.diagnostics.contact_stats.contacts, contacts, "after change {changes}");
             assert!(
                 close(sim.ledger.account.contact_elastic, stored),
                 "{} J/m, {stored} J/m kept",
@@ -784,11 +788,11 @@ mod tests {
             let contact = sim.contact.as_ref().unwrap();
             let fresh: Vec<Option<u64>> =
                 (0..nb).map(|b| sim.contact_node_frequency(contact, b).map(f64::to_bits)).collect();
-            let carried: Vec<Option<u64>> = sim.contact_omega.iter().map(|w| w.map(f64::to_bits)).collect();
+            let carried: Vec<Option<u64>> = sim.frequencies.contact_omega.iter().map(|w| w.map(f64::to_bits)).collect();
             assert_eq!(carried, fresh, "after change {changes}");
             // some carried, some worked out again (none listed: nothing
             // was carried, every node was evaluated)
-            let stale = sim.omega_carry.stale.len();
+            let stale = sim.frequencies.omega_carry.stale.len();
             assert!(0 < stale && stale < nb, "{stale} of {nb} boundary nodes worked out again");
         }
         assert!(changes >= 2, "{changes} insertion checks changed the mesh");

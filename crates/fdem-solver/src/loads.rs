@@ -1,6 +1,70 @@
 //! Supports, prescribed velocities, surface pressure and their time
 //! histories.
 
+use fdem_element::Vec2;
+
+use crate::model::Release;
+use crate::passes::PressureFacet;
+
+/// The external loads of a run: what the node pass adds to the elements'
+/// forces besides contact (ARCHITECTURE.md, "One step"), with the time
+/// histories that scale them.
+#[derive(Default)]
+pub(crate) struct Loads {
+    /// Supports and prescribed velocities, per node.
+    pub constraints: Vec<Constraint>,
+    /// Time histories of the constraints.
+    pub amplitudes: Vec<Amplitude>,
+    /// Their values at the current time.
+    pub amplitude_values: Vec<f64>,
+    /// Pressure loads as given, by ancestor node pairs (re-resolved after
+    /// topology changes).
+    pub pressure_loads: Vec<PressureLoad>,
+    /// Pressure loads resolved on the surface.
+    pub pressure: Vec<PressureFacet>,
+    /// Pressure forces per boundary node at `xⁿ` (N).
+    pub pressure_force: Vec<Vec2>,
+    /// Gravity (m/s²).
+    pub gravity: Vec2,
+    /// The loads of gradual excavations still falling to zero
+    /// ([`crate::Release`]).
+    pub released: Vec<Release>,
+    /// Their sum per node at the current whole step (N; empty while none
+    /// acts): an external load of the node pass
+    /// ([`Simulation::update_release`](crate::Simulation::update_release)).
+    pub release_force: Vec<Vec2>,
+}
+
+impl Loads {
+    /// Sets each time history's value at time `t` (s).
+    pub fn eval_amplitudes(&mut self, t: f64) {
+        for (val, a) in self.amplitude_values.iter_mut().zip(&self.amplitudes) {
+            *val = a.at(t);
+        }
+    }
+
+    /// Sums the loads of the gradual excavations at time `t` (s) into
+    /// [`Self::release_force`] (`nodes` entries) and drops those that
+    /// have fallen to zero (the array is emptied once none is left, so a
+    /// run without them pays nothing).
+    pub fn update_release(&mut self, t: f64, nodes: usize) {
+        self.released.retain(|r| r.share(t) > 0.0);
+        self.release_force.clear();
+        if self.released.is_empty() {
+            return;
+        }
+        self.release_force.resize(nodes, [0.0; 2]);
+        for r in &self.released {
+            let s = r.share(t);
+            for (&v, f) in r.nodes.iter().zip(&r.forces) {
+                let out = &mut self.release_force[v as usize];
+                out[0] += s * f[0];
+                out[1] += s * f[1];
+            }
+        }
+    }
+}
+
 /// A piecewise-linear time history `factor(t)` through `(times[i],
 /// values[i])`, constant beyond the ends. Times strictly increasing (s).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

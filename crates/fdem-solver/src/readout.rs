@@ -168,8 +168,8 @@ impl Simulation {
         }
         let b = self.nodes.bc[i];
         if b != NO_BC {
-            let c = &self.constraints[b as usize];
-            let a = c.amplitude.map_or(1.0, |k| self.amplitudes[k as usize].at(self.clock.time()));
+            let c = &self.loads.constraints[b as usize];
+            let a = c.amplitude.map_or(1.0, |k| self.loads.amplitudes[k as usize].at(self.clock.time()));
             for d in 0..2 {
                 if c.fixed[d] {
                     v[d] = c.value[d] * a;
@@ -208,7 +208,7 @@ impl Simulation {
         let f = self.net_force(i);
         let b = self.nodes.bc[i];
         for d in 0..2 {
-            if b != NO_BC && self.constraints[b as usize].fixed[d] {
+            if b != NO_BC && self.loads.constraints[b as usize].fixed[d] {
                 continue;
             }
             self.nodes.v[i][d] = vn[d] * denom - h * f[d] / m;
@@ -219,8 +219,8 @@ impl Simulation {
     fn net_force(&self, i: usize) -> Vec2 {
         let m = self.nodes.mass[i];
         let (p, c) = self.surface_force(i);
-        let r = self.release_force.get(i).copied().unwrap_or([0.0; 2]);
-        let mut f = [m * self.gravity[0] + p[0] + c[0] + r[0], m * self.gravity[1] + p[1] + c[1] + r[1]];
+        let r = self.loads.release_force.get(i).copied().unwrap_or([0.0; 2]);
+        let mut f = [m * self.loads.gravity[0] + p[0] + c[0] + r[0], m * self.loads.gravity[1] + p[1] + c[1] + r[1]];
         for &item in self.node_elems.row(i) {
             let fe = self.elems.force[item as usize];
             f[0] -= fe[0];
@@ -235,7 +235,10 @@ impl Simulation {
         if b == NONE {
             return ([0.0; 2], [0.0; 2]);
         }
-        (self.pressure_force[b as usize], self.contact_force.get(b as usize).copied().unwrap_or([0.0; 2]))
+        (
+            self.loads.pressure_force[b as usize],
+            self.node_forces.contact_force.get(b as usize).copied().unwrap_or([0.0; 2]),
+        )
     }
 
     /// Rotation `R` (cos, sin) of element `e` at the current configuration.
@@ -348,12 +351,12 @@ impl Simulation {
 
     /// Wall-clock time spent in each phase so far.
     pub fn phase_times(&self) -> PhaseTimes {
-        self.phase_times
+        self.diagnostics.phase_times
     }
 
     /// Counters of the contact search.
     pub fn contact_stats(&self) -> ContactStats {
-        self.contact_stats
+        self.diagnostics.contact_stats
     }
 
     /// The free-surface facets `(start, end, law)` (node ids), oriented with
@@ -447,7 +450,7 @@ impl Simulation {
     pub(crate) fn node_energy_terms(&self, i: usize) -> [f64; 6] {
         let h = 0.5 * self.clock.dt_prev();
         let alpha = self.settings.mass_damping;
-        let g = self.gravity;
+        let g = self.loads.gravity;
         let m = self.nodes.mass[i];
         let v = self.whole_step_velocity(i);
         let kinetic = 0.5 * m * (v[0] * v[0] + v[1] * v[1]);
@@ -457,13 +460,13 @@ impl Simulation {
         let half = self.nodes.v[i];
         let dx = [h * half[0], h * half[1]];
         let (p, c) = self.surface_force(i);
-        let r = self.release_force.get(i).copied().unwrap_or([0.0; 2]);
+        let r = self.loads.release_force.get(i).copied().unwrap_or([0.0; 2]);
         let external = (m * g[0] + p[0] + r[0]) * dx[0] + (m * g[1] + p[1] + r[1]) * dx[1];
         let contact = c[0] * dx[0] + c[1] * dx[1];
         let mut contact_damping = 0.0;
         let bn = self.surface.index_of[i];
         if bn != NONE {
-            if let Some(fd) = self.contact_damping_force.get(bn as usize) {
+            if let Some(fd) = self.node_forces.contact_damping_force.get(bn as usize) {
                 contact_damping = -(fd[0] * dx[0] + fd[1] * dx[1]);
             }
         }
@@ -490,7 +493,7 @@ impl Simulation {
             return r;
         }
         let f = self.net_force(i);
-        let c = &self.constraints[b as usize];
+        let c = &self.loads.constraints[b as usize];
         let alpha = self.settings.mass_damping;
         let half = self.nodes.v[i];
         for d in 0..2 {

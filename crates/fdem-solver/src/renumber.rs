@@ -234,7 +234,7 @@ impl Simulation {
         }
         let clock = std::time::Instant::now();
         self.renumber();
-        self.phase_times.topology += clock.elapsed().as_secs_f64();
+        self.diagnostics.phase_times.topology += clock.elapsed().as_secs_f64();
     }
 
     /// Renumbers now ([`Self::renumber`]), whatever the setting: e.g. after
@@ -283,7 +283,7 @@ impl Simulation {
         permute(&mut nodes.mass, &node_order);
         permute(&mut nodes.bc, &node_order);
         permute(&mut self.ancestor, &node_order);
-        for c in &mut self.constraints {
+        for c in &mut self.loads.constraints {
             c.node = to_node(c.node);
         }
         // per element
@@ -299,29 +299,29 @@ impl Simulation {
         permute(&mut elems.mass_scale, &elem_order);
         permute(&mut elems.state, &elem_order);
         permute(&mut elems.parent, &elem_order);
-        permute(&mut self.omega, &elem_order);
+        permute(&mut self.frequencies.omega, &elem_order);
         elems.force = elem_order.iter().flat_map(|&o| [0, 1, 2].map(|k| elems.force[3 * o as usize + k])).collect();
         if let Some(fr) = &mut self.fracture {
             fr.renumber(&node_order, &elem_order, &node_map);
         }
-        for r in &mut self.released {
+        for r in &mut self.loads.released {
             r.nodes.iter_mut().for_each(|v| *v = node_map[*v as usize]);
         }
-        self.release_force.clear();
+        self.loads.release_force.clear();
         self.update_release();
         self.node_elems = active_node_elements(n, &self.elems.conn, &self.elems.active);
         // by the old boundary indices: worked out again at the next
         // evaluation
-        self.contact_omega.clear();
+        self.frequencies.contact_omega.clear();
 
         // the surface and what hangs on its boundary nodes and facets
         let key_map = |k: u32| 3 * elem_map[(k / 3) as usize] + k % 3;
         let (surface, facet_map, b_map) = self.surface.relabel(&node_map, key_map, &self.nodes.x0);
-        for p in &mut self.pressure {
+        for p in &mut self.loads.pressure {
             p.nodes = p.nodes.map(to_node);
             p.bnodes = p.bnodes.map(|b| b_map[b as usize]);
         }
-        scatter(&mut self.pressure_force, &b_map);
+        scatter(&mut self.loads.pressure_force, &b_map);
         if let Some(c) = &mut self.contact {
             c.relabel(&surface, &facet_map, &b_map);
         }

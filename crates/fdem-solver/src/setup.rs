@@ -10,13 +10,15 @@ use fdem_material::{Elastic, PlasticState};
 use fdem_mesh::{node_elements, validate};
 
 use crate::clock::Clock;
-use crate::contact::ContactModel;
+use crate::contact::{ContactModel, NodeForces};
 use crate::energy::EnergyLedger;
 use crate::error::SetupError;
-use crate::loads::Constraint;
+use crate::excavation::Staging;
+use crate::loads::{Constraint, Loads};
 use crate::model::{LawSpec, ModelSpec};
 use crate::passes::{self, Material, NO_BC};
-use crate::simulation::{check_settings, invalid, ContactStats, Elements, Nodes, PhaseTimes, Simulation};
+use crate::simulation::{check_settings, invalid, Elements, Nodes, Simulation};
+use crate::stable_step::Frequencies;
 use crate::topology::{ancestor_pair, build_surface, resolve_pressures};
 
 impl Simulation {
@@ -249,36 +251,33 @@ impl Simulation {
             },
             materials,
             node_elems,
-            constraints,
-            amplitude_values: vec![1.0; spec.amplitudes.len()],
-            amplitudes: spec.amplitudes,
-            pressure_loads: spec.pressures,
+            loads: Loads {
+                constraints,
+                amplitude_values: vec![1.0; spec.amplitudes.len()],
+                amplitudes: spec.amplitudes,
+                pressure_loads: spec.pressures,
+                pressure,
+                pressure_force: vec![[0.0; 2]; nb],
+                gravity: spec.gravity,
+                released: Vec::new(),
+                release_force: Vec::new(),
+            },
             ancestor,
-            pressure,
-            pressure_force: vec![[0.0; 2]; nb],
-            contact_force: if contact.is_some() { vec![[0.0; 2]; nb] } else { Vec::new() },
-            contact_damping_force: if contact.is_some() { vec![[0.0; 2]; nb] } else { Vec::new() },
-            contact_damped: if contact.is_some() { vec![0; nb] } else { Vec::new() },
-            dashpot_force: Vec::new(),
-            pred_v: Vec::new(),
-            pred_f: Vec::new(),
+            node_forces: NodeForces {
+                contact_force: if contact.is_some() { vec![[0.0; 2]; nb] } else { Vec::new() },
+                contact_damping_force: if contact.is_some() { vec![[0.0; 2]; nb] } else { Vec::new() },
+                contact_damped: if contact.is_some() { vec![0; nb] } else { Vec::new() },
+                ..Default::default()
+            },
             surface,
             contact,
             fracture,
-            stages,
-            next_stage: 0,
-            elastic_stage: false,
-            contact_stats: ContactStats::default(),
-            phase_times: PhaseTimes::default(),
-            omega: vec![0.0; m],
-            gravity: spec.gravity,
+            staging: Staging { stages, next_stage: 0, elastic_stage: false },
+            diagnostics: Default::default(),
+            frequencies: Frequencies { omega: vec![0.0; m], ..Default::default() },
             settings: spec.settings,
             clock: Clock::default(),
             ledger: EnergyLedger::new(n, m),
-            contact_omega: Vec::new(),
-            omega_carry: Default::default(),
-            released: Vec::new(),
-            release_force: Vec::new(),
             layout: crate::renumber::Layout::new(m),
             pool: Arc::new(pool),
         };

@@ -11,12 +11,14 @@ use fdem_material::PlasticState;
 use fdem_mesh::Csr;
 
 use crate::clock::Clock;
-use crate::contact::{AssemblyOut, ContactModel};
+use crate::contact::{AssemblyOut, ContactModel, NodeForces};
 use crate::energy::EnergyLedger;
 use crate::error::{RunError, SetupError};
-use crate::loads::{Amplitude, Constraint, PressureLoad};
+use crate::excavation::Staging;
+use crate::loads::Loads;
 use crate::model::Settings;
-use crate::passes::{self, ElementInputs, Material, NodeInputs, PressureFacet, NO_BC};
+use crate::passes::{self, ElementInputs, Material, NodeInputs, NO_BC};
+use crate::stable_step::Frequencies;
 
 /// Nodal arrays.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -122,66 +124,32 @@ pub struct Simulation {
     pub(crate) elems: Elements,
     pub(crate) materials: Vec<Material>,
     pub(crate) node_elems: Csr,
-    pub(crate) constraints: Vec<Constraint>,
-    pub(crate) amplitudes: Vec<Amplitude>,
-    pub(crate) amplitude_values: Vec<f64>,
-    /// Pressure loads as given, by ancestor node pairs (re-resolved after
-    /// topology changes).
-    pub(crate) pressure_loads: Vec<PressureLoad>,
+    /// Supports, prescribed velocities, gravity, pressure and the loads of
+    /// gradual excavations, with their time histories and resolved forces.
+    pub(crate) loads: Loads,
     /// The original node each node descends from (itself for a node of the
     /// model or a new node on a split edge; the split node for a copy).
     pub(crate) ancestor: Vec<u32>,
     /// The free surfaces of the current mesh.
     pub(crate) surface: Surface,
-    /// Pressure loads resolved on the surface.
-    pub(crate) pressure: Vec<PressureFacet>,
-    /// Pressure forces per boundary node at `xⁿ` (N).
-    pub(crate) pressure_force: Vec<Vec2>,
-    /// Contact forces per boundary node at `xⁿ` (N); empty without contact.
-    pub(crate) contact_force: Vec<Vec2>,
-    /// Their contact-dashpot parts (N), whose work is the contact damping.
-    pub(crate) contact_damping_force: Vec<Vec2>,
-    /// Per boundary node: how many contact dashpots act on it (set by the
-    /// contact assembly; derived, not saved).
-    pub(crate) contact_damped: Vec<u16>,
-    /// Scratch of the node pass with dashpots: the dashpot forces per
-    /// boundary node (N), and per node the predicted velocity (m/s) and
-    /// net force without the dashpots (N).
-    pub(crate) dashpot_force: Vec<Vec2>,
-    pub(crate) pred_v: Vec<Vec2>,
-    pub(crate) pred_f: Vec<Vec2>,
+    /// Contact and bond forces per boundary node and the node pass's
+    /// dashpot scratch.
+    pub(crate) node_forces: NodeForces,
     pub(crate) contact: Option<ContactModel>,
     pub(crate) fracture: Option<crate::fracture::FractureModel>,
-    /// Excavation stages in time order, and the next one to run.
-    pub(crate) stages: Vec<crate::ExcavationStage>,
-    pub(crate) next_stage: usize,
-    /// Elastic stage: plastic laws and crack insertion off (equilibrium).
-    pub(crate) elastic_stage: bool,
-    pub(crate) contact_stats: ContactStats,
-    pub(crate) phase_times: PhaseTimes,
-    /// Highest frequency of every element at the last stable-step update.
-    pub(crate) omega: Vec<f64>,
-    pub(crate) gravity: Vec2,
+    /// Excavation stages and the elastic stage.
+    pub(crate) staging: Staging,
+    /// Contact statistics and phase timings (read out, never read back).
+    pub(crate) diagnostics: Diagnostics,
+    /// The elements' and contact nodes' highest frequencies at the last
+    /// stable-step update.
+    pub(crate) frequencies: Frequencies,
     pub(crate) settings: Settings,
     /// Time, step count and the step sizes around the current step.
     pub(crate) clock: Clock,
     /// The energy account, the passes' partial sums that feed it, and the
     /// watchdog's last look.
     pub(crate) ledger: EnergyLedger,
-    /// Per boundary node: its frequency with its contact springs
-    /// ([`Simulation::contact_node_frequency`]) at the last stable-step
-    /// evaluation (scratch; sized by it).
-    pub(crate) contact_omega: Vec<Option<f64>>,
-    /// What a crack insertion needs to carry [`Self::contact_omega`] over
-    /// to the new surface instead of working every boundary node out again
-    /// ([`Simulation::carry_contact_omega`]; scratch).
-    pub(crate) omega_carry: OmegaCarry,
-    /// The loads of gradual excavations still falling to zero
-    /// ([`crate::Release`]).
-    pub(crate) released: Vec<crate::Release>,
-    /// Their sum per node at the current whole step (N; empty while none
-    /// acts): an external load of the node pass ([`Self::update_release`]).
-    pub(crate) release_force: Vec<Vec2>,
     /// Internal index ↔ id of nodes and elements (spatial renumbering).
     pub(crate) layout: crate::renumber::Layout,
     /// Worker threads; every public entry point that steps runs inside it
@@ -189,19 +157,13 @@ pub struct Simulation {
     pub(crate) pool: Arc<rayon::ThreadPool>,
 }
 
-/// Scratch for carrying the boundary nodes' contact frequencies over a
-/// topology change ([`Simulation::carry_contact_omega`]).
+/// Contact statistics and the time spent in each phase: what the run
+/// reports about itself. The statistics are saved in checkpoints (they
+/// count over the whole run); the timings are not.
 #[derive(Default)]
-pub(crate) struct OmegaCarry {
-    /// The nodes (mesh ids, ascending) whose contact frequency the last
-    /// topology change made stale: to be worked out again by the next
-    /// stable-step evaluation after it.
-    pub stale: Vec<u32>,
-    /// The node masses before the last rebuild (a frequency whose node's
-    /// mass changed in any bit is stale).
-    pub old_mass: Vec<f64>,
-    /// The frequencies' buffer before the carry-over (reused).
-    pub spare: Vec<Option<f64>>,
+pub(crate) struct Diagnostics {
+    pub contact_stats: ContactStats,
+    pub phase_times: PhaseTimes,
 }
 
 pub(crate) fn invalid<T>(msg: String) -> Result<T, SetupError> {
@@ -212,20 +174,14 @@ impl Simulation {
     /// Holds the constrained components of the initial velocity at their
     /// prescribed values at `t = 0`.
     pub(crate) fn apply_prescribed_initial_velocity(&mut self) {
-        self.eval_amplitudes(self.clock.time());
-        for c in &self.constraints {
-            let amp = c.amplitude.map_or(1.0, |k| self.amplitude_values[k as usize]);
+        self.loads.eval_amplitudes(self.clock.time());
+        for c in &self.loads.constraints {
+            let amp = c.amplitude.map_or(1.0, |k| self.loads.amplitude_values[k as usize]);
             for d in 0..2 {
                 if c.fixed[d] {
                     self.nodes.v[c.node as usize][d] = c.value[d] * amp;
                 }
             }
-        }
-    }
-
-    fn eval_amplitudes(&mut self, t: f64) {
-        for (val, a) in self.amplitude_values.iter_mut().zip(&self.amplitudes) {
-            *val = a.at(t);
         }
     }
 
@@ -245,7 +201,7 @@ impl Simulation {
             insertion: self.fracture.is_some(),
             beta: 0.0,
             dt: 0.0,
-            plastic: !self.elastic_stage,
+            plastic: !self.staging.elastic_stage,
         };
         passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, &mut ledger.elem_partials);
         self.surface_forces(0.0);
@@ -269,7 +225,7 @@ impl Simulation {
             insertion: self.fracture.is_some(),
             beta: 0.0,
             dt: 0.0,
-            plastic: !self.elastic_stage,
+            plastic: !self.staging.elastic_stage,
         };
         passes::element_forces_of(&inp, touched, &elems.stress, &mut elems.force);
     }
@@ -279,9 +235,9 @@ impl Simulation {
     pub(crate) fn surface_forces(&mut self, dt: f64) {
         let contact = self.contact.as_mut().map(|c| {
             let out = AssemblyOut {
-                forces: &mut self.contact_force,
-                damping: &mut self.contact_damping_force,
-                damped: &mut self.contact_damped,
+                forces: &mut self.node_forces.contact_force,
+                damping: &mut self.node_forces.contact_damping_force,
+                damped: &mut self.node_forces.contact_damped,
             };
             evaluate_contact(c, &self.surface, &self.nodes, dt, out)
         });
@@ -294,22 +250,27 @@ impl Simulation {
     /// phase clocks.
     fn finish_surface_forces(&mut self, contact: Option<ContactOutcome>) {
         let clock = Instant::now();
-        self.eval_amplitudes(self.clock.time());
-        passes::pressure_forces(&self.nodes.x, &self.pressure, &self.amplitude_values, &mut self.pressure_force);
+        self.loads.eval_amplitudes(self.clock.time());
+        passes::pressure_forces(
+            &self.nodes.x,
+            &self.loads.pressure,
+            &self.loads.amplitude_values,
+            &mut self.loads.pressure_force,
+        );
         if let (Some(contact), Some(out)) = (&self.contact, contact) {
             self.ledger.account.friction += out.sum.friction;
             self.ledger.account.contact_elastic = out.sum.stored;
-            self.contact_stats = ContactStats {
+            self.diagnostics.contact_stats = ContactStats {
                 pairs_evaluated: contact.pairs_evaluated,
                 broad_phase_builds: contact.broad.builds,
                 candidate_pairs: contact.broad.pairs() as u64,
                 contacts: out.sum.contacts,
             };
-            self.phase_times.broad_phase += out.broad_secs;
-            self.phase_times.surface += out.narrow_secs;
+            self.diagnostics.phase_times.broad_phase += out.broad_secs;
+            self.diagnostics.phase_times.surface += out.narrow_secs;
             self.bond_forces();
         }
-        self.phase_times.surface += clock.elapsed().as_secs_f64();
+        self.diagnostics.phase_times.surface += clock.elapsed().as_secs_f64();
     }
 
     /// The contact forces added up again from the contact records, with the
@@ -320,9 +281,9 @@ impl Simulation {
     pub(crate) fn reassemble_surface_forces(&mut self) {
         let Some(c) = self.contact.as_mut() else { return };
         let out = AssemblyOut {
-            forces: &mut self.contact_force,
-            damping: &mut self.contact_damping_force,
-            damped: &mut self.contact_damped,
+            forces: &mut self.node_forces.contact_force,
+            damping: &mut self.node_forces.contact_damping_force,
+            damped: &mut self.node_forces.contact_damped,
         };
         c.reassemble(out);
         self.add_bond_forces();
@@ -333,22 +294,23 @@ impl Simulation {
     /// the surface forces, then the checks that follow a step (fracture,
     /// stable step, renumbering).
     fn step_once(&mut self) -> Result<(), RunError> {
-        if !self.elastic_stage
-            && self.next_stage < self.stages.len()
-            && self.stages[self.next_stage].time <= self.clock.time()
+        if !self.staging.elastic_stage
+            && self.staging.next_stage < self.staging.stages.len()
+            && self.staging.stages[self.staging.next_stage].time <= self.clock.time()
         {
             let clock = Instant::now();
             self.excavate_due();
-            self.phase_times.topology += clock.elapsed().as_secs_f64();
+            self.diagnostics.phase_times.topology += clock.elapsed().as_secs_f64();
         }
         let dt = self.node_pass()?;
         self.element_and_surface_pass(dt)?;
-        if !self.elastic_stage && self.fracture.as_ref().is_some_and(|f| self.clock.every(f.interval as u64)) {
+        if !self.staging.elastic_stage && self.fracture.as_ref().is_some_and(|f| self.clock.every(f.interval as u64)) {
             let clock = Instant::now();
-            let topology = self.phase_times.topology;
+            let topology = self.diagnostics.phase_times.topology;
             // a change of topology rebuilds forces (and contact) itself
             let changed = self.fracture_check();
-            self.phase_times.fracture += clock.elapsed().as_secs_f64() - (self.phase_times.topology - topology);
+            self.diagnostics.phase_times.fracture +=
+                clock.elapsed().as_secs_f64() - (self.diagnostics.phase_times.topology - topology);
             if changed {
                 self.renumber_if_due(true);
                 return Ok(()); // rebuilt forces, contact and the stable step
@@ -367,42 +329,49 @@ impl Simulation {
     /// the step taken (s).
     fn node_pass(&mut self) -> Result<f64, RunError> {
         let (dt, dt_avg) = (self.clock.dt(), self.clock.dt_avg());
-        self.eval_amplitudes(self.clock.mid_step());
+        self.loads.eval_amplitudes(self.clock.mid_step());
         let clock = Instant::now();
         {
             let n = self.nodes.x.len();
-            if self.pred_v.len() != n {
+            if self.node_forces.pred_v.len() != n {
                 // sized to the mesh: changes only with the topology
-                self.pred_v.resize(n, [0.0; 2]);
-                self.pred_f.resize(n, [0.0; 2]);
+                self.node_forces.pred_v.resize(n, [0.0; 2]);
+                self.node_forces.pred_f.resize(n, [0.0; 2]);
             }
-            if self.dashpot_force.len() != self.contact_damped.len() {
-                self.dashpot_force.resize(self.contact_damped.len(), [0.0; 2]);
+            if self.node_forces.dashpot_force.len() != self.node_forces.contact_damped.len() {
+                self.node_forces.dashpot_force.resize(self.node_forces.contact_damped.len(), [0.0; 2]);
             }
-            let Simulation { nodes, elems, ledger, pred_v, pred_f, dashpot_force, contact, .. } = self;
+            let Simulation {
+                nodes,
+                elems,
+                ledger,
+                node_forces: NodeForces { pred_v, pred_f, dashpot_force, .. },
+                contact,
+                ..
+            } = self;
             let node_partials = &mut ledger.node_partials;
             let inp = NodeInputs {
                 mass: &nodes.mass,
                 bnode: &self.surface.index_of,
-                pressure: &self.pressure_force,
-                contact: &self.contact_force,
-                contact_damping: &self.contact_damping_force,
+                pressure: &self.loads.pressure_force,
+                contact: &self.node_forces.contact_force,
+                contact_damping: &self.node_forces.contact_damping_force,
                 bc: &nodes.bc,
                 node_elems: &self.node_elems,
                 elem_force: &elems.force,
-                constraints: &self.constraints,
-                amplitude_values: &self.amplitude_values,
-                gravity: self.gravity,
+                constraints: &self.loads.constraints,
+                amplitude_values: &self.loads.amplitude_values,
+                gravity: self.loads.gravity,
                 alpha: self.settings.mass_damping,
                 local: self.settings.local_damping,
-                release: &self.release_force,
+                release: &self.loads.release_force,
                 dt_avg,
                 dt,
                 dt_prev: self.clock.dt_prev(),
             };
             // with contact dashpots in two stages: the damped nodes'
             // predicted velocities, the dashpots on them, those nodes moved
-            let damped = &self.contact_damped[..];
+            let damped = &self.node_forces.contact_damped[..];
             passes::node_pass(&inp, &mut nodes.x, &mut nodes.v, node_partials, damped, pred_v, pred_f);
             if let Some(c) = contact.as_mut().filter(|c| c.has_dashpots()) {
                 let h = dt_avg / (1.0 + 0.5 * self.settings.mass_damping * dt_avg);
@@ -418,9 +387,9 @@ impl Simulation {
                 );
             }
         }
-        self.phase_times.nodes += clock.elapsed().as_secs_f64();
+        self.diagnostics.phase_times.nodes += clock.elapsed().as_secs_f64();
         self.clock.advance();
-        if !self.released.is_empty() || !self.release_force.is_empty() {
+        if !self.loads.released.is_empty() || !self.loads.release_force.is_empty() {
             self.update_release();
         }
         let (max_speed2, bad_node) = self.ledger.add_node_partials();
@@ -453,7 +422,12 @@ impl Simulation {
         let searched = self.contact.as_mut().map(|c| search_contact(c, &self.surface, &self.nodes, dt));
         let contact = {
             let Simulation {
-                nodes, elems, ledger, contact, contact_force, contact_damping_force, contact_damped, ..
+                nodes,
+                elems,
+                ledger,
+                contact,
+                node_forces: NodeForces { contact_force, contact_damping_force, contact_damped, .. },
+                ..
             } = self;
             let inp = ElementInputs {
                 x: &nodes.x,
@@ -467,7 +441,7 @@ impl Simulation {
                 insertion: self.fracture.is_some(),
                 beta: self.settings.stiffness_damping,
                 dt,
-                plastic: !self.elastic_stage,
+                plastic: !self.staging.elastic_stage,
             };
             let (elements, contact) = rayon::join(
                 || {
@@ -488,7 +462,7 @@ impl Simulation {
                     Some(assemble_contact(c, clocks, out))
                 },
             );
-            self.phase_times.elements += elements;
+            self.diagnostics.phase_times.elements += elements;
             contact
         };
         if let Some(element) = self.ledger.add_element_partials() {
@@ -555,7 +529,7 @@ impl Simulation {
     /// equilibrium stage from a geostatic stress (DESIGN §4.6), whose
     /// transient would otherwise fracture the rock before it is loaded.
     pub fn set_elastic_stage(&mut self, on: bool) {
-        self.elastic_stage = on;
+        self.staging.elastic_stage = on;
     }
 
     /// Sets the steps between fracture checks (DESIGN §4.4) from now on: a
@@ -573,7 +547,7 @@ impl Simulation {
 
     /// Whether an elastic stage is on (see [`Self::set_elastic_stage`]).
     pub fn elastic_stage(&self) -> bool {
-        self.elastic_stage
+        self.staging.elastic_stage
     }
 
     /// Replaces the run settings (damping, safety, fixed step) between stages.
@@ -595,7 +569,7 @@ impl Simulation {
             if !(value[0].is_finite() && value[1].is_finite()) {
                 return invalid(format!("prescribed velocity of node {node} is not finite"));
             }
-            self.constraints[b as usize].value = value;
+            self.loads.constraints[b as usize].value = value;
         }
         Ok(())
     }
@@ -684,27 +658,8 @@ fn assemble_contact(
 }
 
 impl Simulation {
-    /// Sums the loads of the gradual excavations at the current time into
-    /// [`Self::release_force`] and drops those that have fallen to zero
-    /// (the array is emptied once none is left, so a run without them pays
-    /// nothing).
+    /// [`Loads::update_release`] at the current time.
     pub(crate) fn update_release(&mut self) {
-        let t = self.clock.time();
-        self.released.retain(|r| r.share(t) > 0.0);
-        if self.released.is_empty() {
-            self.release_force.clear();
-            return;
-        }
-        let n = self.nodes.x.len();
-        self.release_force.clear();
-        self.release_force.resize(n, [0.0; 2]);
-        for r in &self.released {
-            let s = r.share(t);
-            for (&v, f) in r.nodes.iter().zip(&r.forces) {
-                let out = &mut self.release_force[v as usize];
-                out[0] += s * f[0];
-                out[1] += s * f[1];
-            }
-        }
+        self.loads.update_release(self.clock.time(), self.nodes.x.len());
     }
 }

@@ -15,6 +15,38 @@ use crate::contact::ContactModel;
 use crate::passes::{self, ElementInputs};
 use crate::simulation::Simulation;
 
+/// The highest frequencies the stable step is worked out from, kept
+/// between its evaluations.
+#[derive(Default)]
+pub(crate) struct Frequencies {
+    /// Highest frequency of every element at the last stable-step update
+    /// (rad/s; saved in checkpoints).
+    pub omega: Vec<f64>,
+    /// Per boundary node: its frequency with its contact springs
+    /// ([`Simulation::contact_node_frequency`]) at the last stable-step
+    /// evaluation (scratch; sized by it).
+    pub contact_omega: Vec<Option<f64>>,
+    /// What a crack insertion needs to carry [`Self::contact_omega`] over
+    /// to the new surface instead of working every boundary node out again
+    /// ([`Simulation::carry_contact_omega`]; scratch).
+    pub omega_carry: OmegaCarry,
+}
+
+/// Scratch for carrying the boundary nodes' contact frequencies over a
+/// topology change ([`Simulation::carry_contact_omega`]).
+#[derive(Default)]
+pub(crate) struct OmegaCarry {
+    /// The nodes (mesh ids, ascending) whose contact frequency the last
+    /// topology change made stale: to be worked out again by the next
+    /// stable-step evaluation after it.
+    pub stale: Vec<u32>,
+    /// The node masses before the last rebuild (a frequency whose node's
+    /// mass changed in any bit is stale).
+    pub old_mass: Vec<f64>,
+    /// The frequencies' buffer before the carry-over (reused).
+    pub spare: Vec<Option<f64>>,
+}
+
 impl Simulation {
     /// Re-evaluates the stable step (DESIGN §4.2): `s · min` over the
     /// elements of `2/ω_e` and, with contact, over the boundary nodes of
@@ -51,7 +83,7 @@ impl Simulation {
             }
         }
         self.clock.set_step(crit, &self.settings);
-        self.phase_times.time_step += clock.elapsed().as_secs_f64();
+        self.diagnostics.phase_times.time_step += clock.elapsed().as_secs_f64();
     }
 
     /// The critical step before the safety factor (s), updating the stored
@@ -65,9 +97,9 @@ impl Simulation {
         // after a topology change: the contact frequencies it left stale
         // (the others were carried over, `carry_contact_omega`; when they
         // could not be, the list is ignored and every node evaluated)
-        let stale = std::mem::take(&mut self.omega_carry.stale);
+        let stale = std::mem::take(&mut self.frequencies.omega_carry.stale);
         let crit = self.critical_step_of(touched, Some(&stale));
-        self.omega_carry.stale = stale;
+        self.frequencies.omega_carry.stale = stale;
         crit
     }
 
@@ -80,7 +112,7 @@ impl Simulation {
     fn critical_step_of(&mut self, touched: Option<&[u32]>, nodes: Option<&[u32]>) -> f64 {
         let pool = Arc::clone(&self.pool);
         let element_crit = pool.install(|| {
-            let Simulation { nodes, elems, omega, .. } = self;
+            let Simulation { nodes, elems, frequencies: Frequencies { omega, .. }, .. } = self;
             let inp = ElementInputs {
                 x: &nodes.x,
                 v: &nodes.v,
@@ -93,7 +125,7 @@ impl Simulation {
                 insertion: self.fracture.is_some(),
                 beta: self.settings.stiffness_damping,
                 dt: 0.0,
-                plastic: !self.elastic_stage,
+                plastic: !self.staging.elastic_stage,
             };
             match touched {
                 None => passes::element_frequencies(&inp, &elems.mass_scale, omega),
@@ -109,7 +141,7 @@ impl Simulation {
         let mut crit = element_crit;
         if let Some(contact) = &self.contact {
             let nb = self.surface.nodes.len();
-            let mut wr = std::mem::take(&mut self.contact_omega);
+            let mut wr = std::mem::take(&mut self.frequencies.contact_omega);
             let step = |w: &Option<f64>| w.map_or(f64::INFINITY, |w| 2.0 / w);
             let least = match nodes {
                 Some(list) if wr.len() == nb => {
@@ -137,7 +169,7 @@ impl Simulation {
                     })
                 }
             };
-            self.contact_omega = wr;
+            self.frequencies.contact_omega = wr;
             crit = crit.min(least);
         }
         pool.install(|| {
@@ -179,7 +211,7 @@ impl Simulation {
 
     /// The highest frequency among node `v`'s elements (rad/s).
     fn node_frequency(&self, v: usize) -> f64 {
-        self.node_elems.row(v).iter().map(|&i| self.omega[(i / 3) as usize]).fold(0.0, f64::max)
+        self.node_elems.row(v).iter().map(|&i| self.frequencies.omega[(i / 3) as usize]).fold(0.0, f64::max)
     }
 
     /// Boundary node `b`'s frequency with its contact springs
@@ -224,7 +256,7 @@ impl Simulation {
         // order; the list is sorted below anyway)
         let pool = Arc::clone(&self.pool);
         let mut need: Vec<(u32, f64)> = pool.install(|| {
-            let (omega, active) = (&self.omega, &self.elems.active);
+            let (omega, active) = (&self.frequencies.omega, &self.elems.active);
             let mut need: Vec<(u32, f64)> = (0..omega.len())
                 .into_par_iter()
                 .with_min_len(crate::CHUNK)
@@ -235,8 +267,9 @@ impl Simulation {
                 // the frequencies the step was just found from
                 // (`update_time_step_for` calls this right after
                 // `critical_step`)
-                debug_assert_eq!(self.contact_omega.len(), self.surface.nodes.len());
+                debug_assert_eq!(self.frequencies.contact_omega.len(), self.surface.nodes.len());
                 let nodes: Vec<(usize, f64)> = self
+                    .frequencies
                     .contact_omega
                     .par_iter()
                     .enumerate()

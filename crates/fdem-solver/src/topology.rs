@@ -217,7 +217,7 @@ impl crate::simulation::Simulation {
         // mass must not depend on when the mesh was last renumbered (the
         // old ones kept to find the contact frequencies that stay). Both
         // passes are serial and independent: side by side.
-        std::mem::swap(&mut self.nodes.mass, &mut self.omega_carry.old_mass);
+        std::mem::swap(&mut self.nodes.mass, &mut self.frequencies.omega_carry.old_mass);
         let mut mass = std::mem::take(&mut self.nodes.mass);
         let this = &*self;
         let (node_elems, ()) = rayon::join(
@@ -251,27 +251,27 @@ impl crate::simulation::Simulation {
             dirty.as_deref(),
             |a, b| contact.as_ref().map_or(0, |c| c.law_of(ancestor_pair(ancestor, a, b))),
         );
-        self.pressure = if self.pressure_loads.is_empty() {
+        self.loads.pressure = if self.loads.pressure_loads.is_empty() {
             Vec::new()
         } else {
-            resolve_pressures(&surface, &self.pressure_loads, &self.ancestor, false).unwrap_or_default()
+            resolve_pressures(&surface, &self.loads.pressure_loads, &self.ancestor, false).unwrap_or_default()
         };
         self.carry_contact_omega(&surface, touched);
         let nb = surface.nodes.len();
-        self.pressure_force.clear();
-        self.pressure_force.resize(nb, [0.0; 2]);
+        self.loads.pressure_force.clear();
+        self.loads.pressure_force.resize(nb, [0.0; 2]);
         if let Some(c) = &mut self.contact {
             c.adopt(Some(&self.surface), &surface, &self.nodes.x, origins, touched);
-            self.contact_force.clear();
-            self.contact_force.resize(nb, [0.0; 2]);
-            self.contact_damping_force.clear();
-            self.contact_damping_force.resize(nb, [0.0; 2]);
-            self.contact_damped.clear();
-            self.contact_damped.resize(nb, 0);
+            self.node_forces.contact_force.clear();
+            self.node_forces.contact_force.resize(nb, [0.0; 2]);
+            self.node_forces.contact_damping_force.clear();
+            self.node_forces.contact_damping_force.resize(nb, [0.0; 2]);
+            self.node_forces.contact_damped.clear();
+            self.node_forces.contact_damped.resize(nb, 0);
         }
         self.surface = surface;
         self.ledger.size_partials(n, m);
-        self.omega.resize(m, 0.0);
+        self.frequencies.omega.resize(m, 0.0);
         self.elems.force.resize(3 * m, [0.0; 2]);
     }
 
@@ -292,11 +292,11 @@ impl crate::simulation::Simulation {
     /// the current surface (after a restore or a renumbering), nothing is
     /// carried and the next evaluation works out every node.
     fn carry_contact_omega(&mut self, new: &Surface, touched: Option<&[u32]>) {
-        let carry = &mut self.omega_carry;
+        let carry = &mut self.frequencies.omega_carry;
         carry.stale.clear();
         let old = &self.surface;
-        let Some(touched) = touched.filter(|_| self.contact_omega.len() == old.nodes.len()) else {
-            self.contact_omega.clear();
+        let Some(touched) = touched.filter(|_| self.frequencies.contact_omega.len() == old.nodes.len()) else {
+            self.frequencies.contact_omega.clear();
             return;
         };
         let (mass, old_mass) = (&self.nodes.mass, &carry.old_mass);
@@ -308,13 +308,13 @@ impl crate::simulation::Simulation {
                 && old_mass.get(i).is_some_and(|m| m.to_bits() == mass[i].to_bits())
                 && touched.binary_search(&v).is_err();
             if same {
-                carry.spare.push(self.contact_omega[ob as usize]);
+                carry.spare.push(self.frequencies.contact_omega[ob as usize]);
             } else {
                 carry.stale.push(v);
                 carry.spare.push(None);
             }
         }
-        std::mem::swap(&mut self.contact_omega, &mut carry.spare);
+        std::mem::swap(&mut self.frequencies.contact_omega, &mut carry.spare);
     }
 }
 
