@@ -13,6 +13,7 @@
 //! * [`softening`]: the shape of the tensile softening curve (linear, or
 //!   bilinear as Petersson's for concrete).
 
+pub mod crack_band;
 mod dense;
 pub mod elastic;
 pub mod mohr_coulomb_rankine;
