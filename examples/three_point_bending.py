@@ -47,7 +47,7 @@ Checks (``main`` returns them, tests/test_examples.py tests them):
   between the pad's and the supports' reactions beyond half the peak;
 - the work of the load, for the energy a crack took.
 
-    python examples/three_point_bending.py [--size 0.01] [--insert-at 0.02] [--out beam_output]
+    python examples/three_point_bending.py [--size 0.01] [--insert-at 0.02] [--softening bilinear] [--out beam_output]
 """
 
 from __future__ import annotations
@@ -67,10 +67,13 @@ SPEED = 5e-3  # m/s at the pad
 PETERSSON_PEAK = 16e3  # N/m: about 0.8 kN on Petersson's 50 mm thick beams
 
 
-def concrete() -> fdem.MohrCoulombRankine:
-    """The concrete: Rankine in tension with linear softening; Mohr–Coulomb
-    (c 11.5 MPa, φ 30°: 40 MPa in compression) stays out of play."""
-    return fdem.MohrCoulombRankine(E=E, nu=NU, rho=RHO, c=11.5e6, phi=30.0, psi=5.0, ft=FT, Gf=GF)
+def concrete(softening: str = "bilinear") -> fdem.MohrCoulombRankine:
+    """The concrete: Rankine in tension softening along Petersson's
+    bilinear curve, the one he fitted to this concrete (``ft/3`` at ``0.8
+    Gf/ft``, zero at ``3.6 Gf/ft``), or ``softening="linear"``;
+    Mohr–Coulomb (c 11.5 MPa, φ 30°: 40 MPa in compression) stays out of
+    play."""
+    return fdem.MohrCoulombRankine(E=E, nu=NU, rho=RHO, c=11.5e6, phi=30.0, psi=5.0, ft=FT, Gf=GF, softening=softening)
 
 
 def beam_mesh(size: float, *, seed: int = 0) -> fdem.Mesh:
@@ -139,11 +142,18 @@ def pad_mesh() -> fdem.Mesh:
     return pad.with_sets(facet_sets={"faces": pad.boundary_facets()})
 
 
-def model(size: float = 0.01, *, insert_at: float | None = None, check_every: int | None = None) -> fdem.Model:
+def model(
+    size: float = 0.01,
+    *,
+    insert_at: float | None = None,
+    check_every: int | None = None,
+    softening: str = "bilinear",
+) -> fdem.Model:
     """The beam ready to run: supports (a pin and a roller), a steel pad
     resting on the beam at mid-span and driven down at ``SPEED`` (after a
     10 ms ramp) at its top face, frictional contact on crack faces and
-    crack insertion with the library's defaults unless given.
+    crack insertion with the library's defaults unless given; the
+    concrete softens along ``softening`` (:func:`concrete`).
 
     The pad is a body of its own that meets the beam by contact, as the
     Brazilian test's jaws meet the disc: a beam cut through under it can
@@ -165,7 +175,7 @@ def model(size: float = 0.01, *, insert_at: float | None = None, check_every: in
         pad.with_sets(element_sets={"body": np.arange(pad.n_elements)}),
         prefixes=("", "pad_"),
     )
-    beam = fdem.Model(mesh, materials={"beam": concrete(), "pad_body": STEEL})
+    beam = fdem.Model(mesh, materials={"beam": concrete(softening), "pad_body": STEEL})
     beam.fix("left_support").fix("right_support", x=False, y=True)
     beam.prescribe_velocity("pad_top", vx=0.0, vy=-SPEED, amplitude=fdem.Amplitude.ramp(1e-2))
     options = {k: v for k, v in (("insert_at", insert_at), ("check_every", check_every)) if v is not None}
@@ -197,6 +207,7 @@ def main(
     *,
     insert_at: float | None = None,
     check_every: int | None = None,
+    softening: str = "bilinear",
     deflection: float = 0.8e-3,
     threads: int | None = None,
     out: str | None = "beam_output",
@@ -204,7 +215,7 @@ def main(
     """Runs the beam to ``deflection`` (m) at the pad; returns the checks
     (see the module's docstring) and writes ``beam.csv`` and ``beam.png``
     into ``out`` if given."""
-    beam = model(size, insert_at=insert_at, check_every=check_every)
+    beam = model(size, insert_at=insert_at, check_every=check_every, softening=softening)
     omega = (math.pi / SPAN) ** 2 * math.sqrt(E * DEPTH**2 / 12 / RHO)  # first bending mode (rad/s)
     sim = fdem.Simulation(beam, threads=threads, mass_damping=2 * 0.1 * omega)
     start, until = time.perf_counter(), 5e-3 + deflection / SPEED
@@ -325,10 +336,16 @@ if __name__ == "__main__":
     ap.add_argument("--size", type=float, default=0.01, help="element size at the ligament (m)")
     ap.add_argument("--insert-at", type=float, default=None, help="nodal failure factor of insertion")
     ap.add_argument("--check-every", type=int, default=None, help="steps between fracture checks")
+    ap.add_argument("--softening", choices=("bilinear", "linear"), default="bilinear", help="concrete's curve")
     ap.add_argument("--threads", type=int, default=None)
     ap.add_argument("--out", default="beam_output")
     a = ap.parse_args()
     for key, value in main(
-        a.size, insert_at=a.insert_at, check_every=a.check_every, threads=a.threads, out=a.out
+        a.size,
+        insert_at=a.insert_at,
+        check_every=a.check_every,
+        softening=a.softening,
+        threads=a.threads,
+        out=a.out,
     ).items():
         print(f"{key}: {value:.4g}")
