@@ -76,6 +76,9 @@ def test_notched_beam_on_the_coarse_mesh(tmp_path):
     tests below."""
     r = load("three_point_bending").main(0.02, out=str(tmp_path))
     assert r["peak_load"] == pytest.approx(r["petersson_peak"], rel=0.10)
+    # the crack runs up from the notch tip, at mid-span (measured: 1.7°
+    # from the vertical, 2.8 mm off, 73 mm up by 0.8 mm)
+    assert abs(r["crack_angle_deg"]) < 10 and abs(r["crack_offset"]) < 0.02 and r["crack_height"] > 0.05
     assert (tmp_path / "beam.png").stat().st_size > 10_000
     text = (tmp_path / "beam.csv").read_text()
     assert text.startswith("time_s,deflection_m,load_N_per_m")
@@ -114,6 +117,13 @@ def test_notched_beam_meshes_and_insertion(beam_runs):
         assert r["largest_change_at_insertion"] < 0.05
     peaks = [r["peak_load"] for r in meshes]
     assert max(peaks) <= 1.05 * min(peaks)
+    # issue 33 (4): the crack paths agree between the meshes: up from the
+    # notch within 10° of the vertical (symmetry) and of each other, within
+    # 1 cm of mid-span (measured: −0.7°, +2.2°, −5.3°; 2.0, −1.4, −2.4 mm
+    # off; 72, 69, 74 mm up by 0.8 mm)
+    angles = [r["crack_angle_deg"] for r in meshes]
+    assert all(abs(a) < 10 for a in angles) and max(angles) - min(angles) < 10, angles
+    assert all(abs(r["crack_offset"]) < 0.01 for r in meshes), [r["crack_offset"] for r in meshes]
 
 
 @pytest.mark.slow
