@@ -70,6 +70,17 @@ fn reseal(b: &mut [u8]) {
     b[36..40].copy_from_slice(&crc.to_le_bytes());
 }
 
+/// Checkpoint `v` with the f64 at byte `at` set to `value`, both checksums
+/// made to match: a consistent file holding a bad value.
+fn with_f64_at(v: &[u8], at: usize, value: f64) -> Vec<u8> {
+    let mut bad = v.to_vec();
+    bad[at..at + 8].copy_from_slice(&value.to_le_bytes());
+    let crc = crc32fast::hash(&bad[40..]);
+    bad[32..36].copy_from_slice(&crc.to_le_bytes());
+    reseal(&mut bad);
+    bad
+}
+
 #[test]
 fn damaged_files_are_refused_with_the_reason() {
     let mut sim = Simulation::new(plate(6), 1).unwrap();
@@ -520,12 +531,7 @@ fn a_format_8_file_reads_with_isotropic_bonds_and_bad_bond_laws_are_refused() {
     assert!(b.energies().residual().is_finite());
     // the last bond's damage made 2
     let s_len = u64::from_le_bytes(v9[16..24].try_into().unwrap()) as usize;
-    let at = 40 + s_len - f10 - (varint(2) + 2 * 8) - 8;
-    let mut bad = v9.clone();
-    bad[at..at + 8].copy_from_slice(&2.0f64.to_le_bytes());
-    let crc = crc32fast::hash(&bad[40..]);
-    bad[32..36].copy_from_slice(&crc.to_le_bytes());
-    reseal(&mut bad);
+    let bad = with_f64_at(&v9, 40 + s_len - f10 - (varint(2) + 2 * 8) - 8, 2.0);
     let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
     assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("mixed-mode")), "{e}");
 }
@@ -567,12 +573,7 @@ fn bilinear_curves_and_kinks_survive_a_restart_and_a_format_9_file_reads_linear(
     // the last bond's kink made 2 in its traction (the last f64 of the state)
     assert!(c.bonds().len() == nb && v10_last_kinked(&v10, nb, kinked));
     let s_len = u64::from_le_bytes(v10[16..24].try_into().unwrap()) as usize;
-    let at = 40 + s_len - 8;
-    let mut bad = v10.clone();
-    bad[at..at + 8].copy_from_slice(&2.0f64.to_le_bytes());
-    let crc = crc32fast::hash(&bad[40..]);
-    bad[32..36].copy_from_slice(&crc.to_le_bytes());
-    reseal(&mut bad);
+    let bad = with_f64_at(&v10, 40 + s_len - 8, 2.0);
     let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
     assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("kinks")), "{e}");
 }
