@@ -473,8 +473,9 @@ class Simulation:
     def bonds(self) -> dict[str, NDArray[Any]]:
         """The intact cohesive bonds across cracks inserted before full
         softening (``Model.fracture(insert_at=...)``): ``nodes`` (k, 2),
-        ``length`` (m), ``strength`` (Pa), ``final_opening`` (m),
-        ``max_opening`` (m), ``damage`` (0–1) and ``offset`` (k, 2) (m: the
+        ``length`` (m), ``strength`` (Pa), ``final_opening`` (m: ``2 G_I /
+        strength``, where the traction ends in pure opening unless the bond
+        continues a bilinear curve's kink), ``max_opening`` (m), ``damage`` (0–1) and ``offset`` (k, 2) (m: the
         opening with which a bond took over the force through its node when
         its crack was inserted, docs/fracture.md)."""
         return self._core.bonds()

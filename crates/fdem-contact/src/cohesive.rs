@@ -170,7 +170,13 @@ impl Envelope {
         let Some(kink) = self.kink else { return 0.0 };
         let (peak, dk, tk) = self.corners(k, kink);
         if delta <= dk {
-            peak - (peak - tk) * (delta - self.onset) / (dk - self.onset)
+            // a first branch of no length (a kink at the onset, to the
+            // last bit) is the peak
+            if dk > self.onset {
+                peak - (peak - tk) * (delta - self.onset) / (dk - self.onset)
+            } else {
+                peak
+            }
         } else {
             tk * (self.last - delta) / (self.last - dk)
         }
@@ -182,7 +188,7 @@ impl Envelope {
     fn kinked_dissipation(&self, k: f64, kink: Kink, d: f64) -> f64 {
         let (a, f) = (self.onset, self.last);
         let (peak, dk, tk) = self.corners(k, kink);
-        let b1 = (peak - tk) / (dk - a);
+        let b1 = if dk > a { (peak - tk) / (dk - a) } else { 0.0 };
         let b2 = tk / (f - dk);
         let delta = if d >= 1.0 {
             f

@@ -14,7 +14,10 @@
 //!   `H = h_c f_t² / (2 G_f)` (B.1–B.4). One fracturing strain `κ` is shared
 //!   by the tensile planes, its increment the sum of their multipliers
 //!   (the paper's κ1..κ3 by principal order have no consistent return once a
-//!   softened σ1 drops below σ2; DESIGN §4.3).
+//!   softened σ1 drops below σ2; DESIGN §4.3). With bilinear softening
+//!   ([`Softening`], docs/fracture.md "Softening laws") `σ_y(κ)` has two
+//!   straight branches meeting at a kink, and a return is solved on the
+//!   branch `κ` is on, then, if it crosses the kink, on the second.
 //!
 //! For an active set `A` the return `σ = σ^tr − Σ Δγ_β C n_β`,
 //! `κ = κⁿ + Σ_{β∈R} Δγ_β` keeps every active function at zero: the linear
@@ -365,7 +368,8 @@ impl MohrCoulombRankine {
     /// both measured along the crack normal (the band rule's width for
     /// [`CrackBand::Equivalent`]), and κ by the inverse, so that the failure
     /// factor and the softened strength are continuous and what the piece has
-    /// left to dissipate is `(1 − F)² G_f` per unit crack area, as for its
+    /// left to dissipate is `r(F) G_f` per unit crack area (`(1 − F)²` for
+    /// linear softening; [`Softening::remaining`]), as for its
     /// parent. A piece keeping the parent's wider band would be more brittle
     /// than the material: it would fail with `G_f h_piece / h_parent`.
     /// States that have not cracked are left alone.
@@ -468,8 +472,10 @@ impl MohrCoulombRankine {
     /// branch of the softening law: `exhausted = false` for linear softening
     /// (the strength must stay ≥ 0), `true` for the part past full softening
     /// (zero strength; valid only if the step's `Δκ` reaches `f_t/H`).
-    /// `None` when the branch does not apply or its system is singular. Not
-    /// checked for consistency.
+    /// `None` when the branch does not apply or its system is singular
+    /// (for bilinear softening, a first branch's return with a multiplier
+    /// negative beyond [`Self::tolerance`] gives way to the second
+    /// branch's). Not checked for consistency.
     pub fn principal_return(
         &self,
         s: [f64; 3],
@@ -495,10 +501,19 @@ impl MohrCoulombRankine {
                 return on_branch.filter(|r| r.strength >= 0.0);
             }
             // on the first branch: its return if it stays before the kink,
-            // else the second branch's (the curve is continuous and no
-            // steeper than the elastic stiffness: one of them holds)
+            // else the second branch's. With one tensile plane the residual
+            // falls strictly with Δκ (no branch steeper than the stiffness
+            // below the snap-back size), so exactly one branch holds. With
+            // two or three (stiffness λ + μ or the bulk modulus, below E')
+            // the first branch can be steeper than the set's stiffness; its
+            // solution then has Δκ < 0, which `solve_set` refuses (`reject`),
+            // and the second branch's or the exhausted one's is taken.
             let kink = kink_stress * self.tensile_strength;
-            if let Some(r) = on_branch.filter(|r| r.strength >= kink * (1.0 - 1e-12)) {
+            // (a negative multiplier is refused here too, as `update`'s
+            // `reject` does, so that `principal_return` agrees)
+            let (g2, tol) = (2.0 * self.elastic.mu, self.tolerance(t.s));
+            let admissible = |r: &PrincipalReturn| r.multipliers.iter().all(|&x| x * g2 >= -tol);
+            if let Some(r) = on_branch.filter(|r| r.strength >= kink * (1.0 - 1e-12) && admissible(r)) {
                 return Some(r);
             }
             let sy = h2 * (kappa_max - t.kappa);

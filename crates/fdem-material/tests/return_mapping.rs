@@ -453,7 +453,8 @@ fn softening_dissipates_the_fracture_energy() {
 /// `3.6 G_f/f_t`) in a band of 0.5 m driven in uniaxial strain past full
 /// softening, with steps of a hundredth of the kink's opening spread over
 /// the band: the stress follows `f_t s(w/w_c)` at the crack opening
-/// `w = κ h_c` within 1% of `f_t` (the steps cross the kink in one go), the
+/// `w = κ h_c` within 10⁻⁶ of `f_t` (a return lands on the curve, also
+/// when a step crosses the kink), the
 /// dissipation per unit volume integrates to `G_f / h_c` within 0.1%, and
 /// the stress is zero from `w_c` on.
 #[test]
@@ -484,7 +485,7 @@ fn bilinear_softening_follows_the_curve_and_dissipates_the_fracture_energy() {
             worst = worst.max((s[0] - ft * Softening::PETERSSON.stress(w / w_c)).abs());
         }
     }
-    assert!(worst < 1e-2 * ft, "stress off the curve by {worst} Pa");
+    assert!(worst < 1e-6 * ft, "stress off the curve by {worst} Pa");
     assert!((state.crack_band - 0.5).abs() < 1e-12, "band {}", state.crack_band);
     let expected = gf / state.crack_band;
     assert!((dissipated - expected).abs() < 1e-3 * expected, "{dissipated} vs {expected}");

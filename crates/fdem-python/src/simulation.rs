@@ -662,7 +662,8 @@ impl PySimulation {
 
     /// The intact cohesive bonds across cracks inserted before full softening:
     /// `nodes` (k, 2) int64, `length` (m), `strength` t₀ (Pa),
-    /// `final_opening` δ_c (m), `max_opening` (m), `damage` (0–1), `offset`
+    /// `final_opening` δ_c = 2 G_I / t₀ (m; where the traction ends in pure
+    /// opening on a straight envelope), `max_opening` (m), `damage` (0–1), `offset`
     /// (k, 2) (m, the opening with which each bond took over the force
     /// through its node when its crack was inserted), `normal` (k, 2) (the
     /// crack normal of a mixed-mode bond, zero for the isotropic bonds of

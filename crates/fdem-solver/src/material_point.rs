@@ -56,7 +56,7 @@ pub fn material_point(
     if let Some(l) = &law {
         if crack_band > l.snap_back_size() {
             return Err(SetupError::Invalid(format!(
-                "element_size = {crack_band} m exceeds the snap-back limit 2 E' Gf / ft^2 = {:.4} m",
+                "element_size = {crack_band} m exceeds the snap-back limit E' w_c / (ft max|s'|) = {:.4} m (2 E' Gf / ft^2 for linear softening)",
                 l.snap_back_size()
             )));
         }

@@ -93,7 +93,7 @@ impl Simulation {
                 let limit = law.snap_back_size();
                 if size > limit {
                     return invalid(format!(
-                        "element {e} is {size:.4} m across, larger than the snap-back limit 2 E' Gf / ft^2 = {limit:.4} m \
+                        "element {e} is {size:.4} m across, larger than the snap-back limit E' w_c / (ft max|s'|) = {limit:.4} m (2 E' Gf / ft^2 for linear softening) \
                          of its material {}: refine the mesh there or raise Gf",
                         spec.element_material[e]
                     ));
