@@ -266,7 +266,7 @@ def main(
         "pad_change_elsewhere": pad_else / pad_mean[pad_k],
         "pad_minus_supports": float(np.abs(pad - support)[load > 0.5 * mean[k]].max() / mean[k]),
         "cracks": float(cracks[-1]),
-        **crack_path(sim, beam),
+        **crack_path(sim),
         "work": work,
         "steps": float(sim.steps),
         "wall_s": time.perf_counter() - start,
@@ -276,7 +276,7 @@ def main(
     return summary
 
 
-def crack_path(sim: fdem.Simulation, beam: fdem.Model) -> dict[str, float]:
+def crack_path(sim: fdem.Simulation) -> dict[str, float]:
     """The crack above the notch at the end of the run: its direction
     (degrees from the vertical, positive leaning towards +x), the
     length-weighted mean offset of its faces from mid-span (m) and the
@@ -284,10 +284,8 @@ def crack_path(sim: fdem.Simulation, beam: fdem.Model) -> dict[str, float]:
     within 0.1 m of mid-span above the tip; the line is the principal
     axis of the faces' midpoints weighted by their length. NaN without a
     crack."""
-    facets, laws = sim.surface_facets()
-    x = sim.positions()
-    f = facets[laws == beam._contact["crack"]]
-    a, b = x[f[:, 0]], x[f[:, 1]]
+    faces = sim.crack_faces()
+    a, b = faces[:, 0], faces[:, 1]
     mid, length = 0.5 * (a + b), np.linalg.norm(b - a, axis=1)
     xc = LENGTH / 2
     near = (np.abs(mid[:, 0] - xc) < 0.1) & (mid[:, 1] > DEPTH - NOTCH - 1e-3)

@@ -43,14 +43,6 @@ def pieces(sim: fdem.Simulation) -> list[tuple[float, np.ndarray, np.ndarray]]:
     return sorted(out, key=lambda o: -o[0])
 
 
-def crack_faces(sim: fdem.Simulation, law: int) -> np.ndarray:
-    """Crack faces (k, 2, 2) as coordinate pairs."""
-    facets, laws = sim.surface_facets()
-    x = sim.positions()
-    f = facets[laws == law]
-    return np.stack([x[f[:, 0]], x[f[:, 1]]], axis=1)
-
-
 def pulled_bar(
     mesh: fdem.Mesh, weak: np.ndarray, gf: float, *, threads: int | None = None, softening: str = "linear"
 ) -> tuple[fdem.Simulation, fdem.Model]:
@@ -97,8 +89,11 @@ def test_tension_bar_dissipates_gf_times_the_section_on_three_meshes():
         sim.run(until=0.012, progress=False)
         e = sim.energies()
         ratios.append(e["fracture"] / gfw)
-        crack_law = 1  # free boundary 0, no named interface, cracks last
-        faces = crack_faces(sim, crack_law)
+        # the crack faces by their law (free boundary 0, no named
+        # interface, cracks last), as Simulation.crack_faces finds them
+        facets, laws = sim.surface_facets()
+        assert np.array_equal(sim.crack_faces(), sim.positions()[facets[laws == 1]])
+        faces = sim.crack_faces()
         assert len(faces) > 0
         # every crack face lies in the weak section (within two elements)
         assert np.all(np.abs(faces[:, :, 0] - 0.25) < 2 * size), size
@@ -130,7 +125,7 @@ def test_bilinear_softening_dissipates_gf_times_the_section_on_three_meshes():
         sim.run(until=0.02, progress=False)
         e = sim.energies()
         ratios.append(e["fracture"] / gfw)
-        faces = crack_faces(sim, 1)
+        faces = sim.crack_faces()
         assert len(faces) > 0 and np.all(np.abs(faces[:, :, 0] - 0.25) < 2 * size), size
         assert abs(e["residual"]) < 2e-3 * gfw
     ratios = np.array(ratios)
@@ -259,7 +254,7 @@ def test_brazilian_disc_centre_stress_and_split_along_the_loaded_diameter():
         checked += 1
     assert checked >= 5 and sim.insertions > 0
     sim.run(until=sim.time + 0.5e-3, progress=False)
-    faces = crack_faces(sim, 1)
+    faces = sim.crack_faces()
     mid = faces.mean(axis=1)
     length = np.hypot(*(faces[:, 1] - faces[:, 0]).T)
     inside = np.hypot(*mid.T) < 0.8 * radius  # away from the crushed contacts
@@ -304,7 +299,7 @@ def test_a_mode_one_crack_runs_normal_to_the_load_whatever_the_mesh(kind):
     model.contact(fdem.Interface(friction=30, damping=0.5)).fracture(check_every=5)
     sim = fdem.Simulation(model, stiffness_damping=1e-6)
     sim.run(until=5e-4, progress=False)
-    faces = crack_faces(sim, 1)
+    faces = sim.crack_faces()
     mid = faces.mean(axis=1)
     faces = faces[(np.abs(mid) < 0.06).all(axis=1)]
     length = np.hypot(*(faces[:, 1] - faces[:, 0]).T)

@@ -438,6 +438,21 @@ class Simulation:
         each one's interface law (0: free boundary)."""
         return self._core.surface_facets()
 
+    def crack_faces(self) -> NDArray[np.float64]:
+        """The faces of the inserted cracks at their current positions,
+        (k, 2, 2) (m): each face's two end points, a crack having two faces;
+        empty without fracture."""
+        f = self._crack_facets()
+        x = self.positions()
+        return np.stack([x[f[:, 0]], x[f[:, 1]]], axis=1) if len(f) else np.zeros((0, 2, 2))
+
+    def _crack_facets(self) -> NDArray[np.int64]:
+        """Node pairs (k, 2) of the surface facets that are crack faces."""
+        if self.model._contact is None:
+            return np.zeros((0, 2), dtype=np.int64)
+        facets, laws = self.surface_facets()
+        return facets[laws == self.model._contact["crack"]]
+
     def crack_length(self, along: Any = None) -> float:
         """Length of material the inserted cracks have cut (m, per unit
         thickness): half the reference length of all crack faces (a crack
@@ -451,8 +466,7 @@ class Simulation:
         triangles is longer than the band it cuts. 0 without fracture."""
         if self.model._contact is None:
             return 0.0
-        facets, laws = self.surface_facets()
-        f = facets[laws == self.model._contact["crack"]]
+        f = self._crack_facets()
         x = self.reference_positions()
         t = x[f[:, 1]] - x[f[:, 0]]
         if along is None:

@@ -495,9 +495,13 @@ impl MohrCoulombRankine {
             let Softening::Bilinear { kink_stress, .. } = self.softening else {
                 return on_branch.filter(|r| r.strength >= 0.0);
             };
+            if t.h == 0.0 || active & RANKINE == 0 {
+                // exhausted, or no tensile plane: κ does not move
+                return on_branch.filter(|r| r.strength >= 0.0);
+            }
             let (h2, kappa_max) = self.second_branch(t.band);
-            if t.h == h2 || t.h == 0.0 || active & RANKINE == 0 {
-                // on the second branch already (or exhausted, or no crack)
+            if t.h == h2 {
+                // on the second branch already
                 return on_branch.filter(|r| r.strength >= 0.0);
             }
             // on the first branch: its return if it stays before the kink,

@@ -557,6 +557,7 @@ fn bilinear_curves_and_kinks_survive_a_restart_and_a_format_9_file_reads_linear(
     }
     let nb = a.bonds().len();
     let kinked = a.bonds().iter().filter(|b| b.mode.and_then(|m| m.kink).is_some()).count();
+    let last_kinked = a.bonds().last().and_then(|b| b.mode).is_some_and(|m| m.kink.is_some());
     assert!(kinked > 0, "no bond made before the kink has one");
     let v10 = a.checkpoint_bytes(b"");
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v10, 2).unwrap();
@@ -571,16 +572,9 @@ fn bilinear_curves_and_kinks_survive_a_restart_and_a_format_9_file_reads_linear(
     let (c, _) = Simulation::from_checkpoint_bytes(&v9, 1).unwrap();
     assert!(c.bonds().iter().all(|b| b.mode.is_some_and(|m| m.kink.is_none())));
     // the last bond's kink made 2 in its traction (the last f64 of the state)
-    assert!(c.bonds().len() == nb && v10_last_kinked(&v10, nb, kinked));
+    assert!(c.bonds().len() == nb && last_kinked, "the last bond has no kink to spoil");
     let s_len = u64::from_le_bytes(v10[16..24].try_into().unwrap()) as usize;
     let bad = with_f64_at(&v10, 40 + s_len - 8, 2.0);
     let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
     assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("kinks")), "{e}");
-}
-
-/// Whether the last bond in checkpoint `v` (with `nb` bonds, `kinked` of
-/// them with a kink) has one: the option tag 17 bytes before the end is 1.
-fn v10_last_kinked(v: &[u8], nb: usize, kinked: usize) -> bool {
-    let s_len = u64::from_le_bytes(v[16..24].try_into().unwrap()) as usize;
-    nb > 0 && kinked > 0 && v[40 + s_len - 17] == 1
 }
