@@ -33,6 +33,39 @@ impl Csr {
         Self { offsets, items }
     }
 
+    /// The lists with some rows worked out again: `rows` rows, row `i`
+    /// copied from `self` unless `i` is in `replaced` (ascending, no
+    /// repeats), whose rows `row(i, out)` appends to `out` instead. Rows
+    /// from `self.rows()` on must all be replaced (they have nothing to
+    /// copy). A topology change touches a few rows of the node→element
+    /// lists: copying the rest costs a pass over the items, against the
+    /// counting sort of every pair that [`Csr::from_pairs`] does.
+    pub fn with_rows_replaced(&self, rows: usize, replaced: &[u32], mut row: impl FnMut(u32, &mut Vec<u32>)) -> Self {
+        let mut offsets = Vec::with_capacity(rows + 1);
+        let mut items = Vec::with_capacity(self.items.len() + 8 * replaced.len());
+        offsets.push(0);
+        let mut next = replaced.iter().copied().peekable();
+        let mut i = 0;
+        while i < rows {
+            if next.peek() == Some(&(i as u32)) {
+                next.next();
+                row(i as u32, &mut items);
+                offsets.push(items.len() as u32);
+                i += 1;
+                continue;
+            }
+            // a run of copied rows up to the next replaced one: one copy
+            let end = next.peek().map_or(rows, |&r| r as usize);
+            assert!(end <= self.rows(), "row {} is new and must be replaced", self.rows().max(i));
+            let (from, to) = (self.offsets[i], self.offsets[end]);
+            items.extend_from_slice(&self.items[from as usize..to as usize]);
+            let shift = items.len() as i64 - to as i64;
+            offsets.extend(self.offsets[i + 1..=end].iter().map(|&o| (o as i64 + shift) as u32));
+            i = end;
+        }
+        Self { offsets, items }
+    }
+
     /// Number of rows.
     pub fn rows(&self) -> usize {
         self.offsets.len().saturating_sub(1)
@@ -56,5 +89,21 @@ mod tests {
         assert_eq!(c.row(1), &[] as &[u32]);
         assert_eq!(c.row(2), &[7, 3]);
         assert_eq!(c.rows(), 3);
+    }
+
+    #[test]
+    fn replaced_rows_match_a_build_from_scratch() {
+        let c = Csr::from_pairs(5, vec![(0, 1), (1, 2), (1, 3), (3, 4), (4, 5), (4, 6)]);
+        // rows 1 and 3 replaced, two new rows (5, 6) appended
+        let got = c.with_rows_replaced(7, &[1, 3, 5, 6], |i, out| out.extend((0..i).map(|k| 10 * i + k)));
+        let want = Csr::from_pairs(
+            7,
+            vec![(0, 1), (1, 10), (3, 30), (3, 31), (3, 32), (4, 5), (4, 6), (5, 50), (5, 51), (5, 52), (5, 53), (5, 54)]
+                .into_iter()
+                .chain((0..6).map(|k| (6, 60 + k))),
+        );
+        assert_eq!(got, want);
+        // nothing replaced: a copy
+        assert_eq!(c.with_rows_replaced(5, &[], |_, _| {}), c);
     }
 }
