@@ -2,8 +2,9 @@
 //! topology change. A global allocator counts the allocations made while
 //! a window of steps runs, after a warm-up that lets every buffer reach its
 //! size: steps of a contacting, yielding run with the broad phase rebuilt
-//! every few steps (fracture off), and steps with fracture checks that
-//! insert nothing; on 1 and 2 threads, none of fdem's.
+//! every few steps (fracture off), steps with fracture checks that
+//! insert nothing, and steps whose bonds (young cracks) neither grow nor
+//! break; on 1 and 2 threads, none of fdem's.
 //!
 //! rayon's scheduler allocates now and then on more than one thread (the
 //! garbage bags of crossbeam-epoch, under its work-stealing deques): an
@@ -68,15 +69,21 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
 
-/// Runs `steps` steps of `sim` as a watched window, and fails with the
-/// first of fdem's allocations in it.
-fn watch(sim: &mut Simulation, steps: u64, what: &str) {
+/// Runs `steps` steps of `sim` as a watched window: fdem's allocations in
+/// it, with the backtrace of the first.
+fn window(sim: &mut Simulation, steps: u64) -> (u64, String) {
     OURS.store(0, Ordering::Relaxed);
     WATCH.store(true, Ordering::Relaxed);
     sim.step(steps).expect("the impact runs");
     WATCH.store(false, Ordering::Relaxed);
     let ours = OURS.load(Ordering::Relaxed);
-    let first = FIRST.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    (ours, FIRST.lock().unwrap_or_else(|e| e.into_inner()).clone())
+}
+
+/// Runs `steps` steps of `sim` as a watched window, and fails with the
+/// first of fdem's allocations in it.
+fn watch(sim: &mut Simulation, steps: u64, what: &str) {
+    let (ours, first) = window(sim, steps);
     assert_eq!(ours, 0, "{ours} allocations in {steps} steps ({what}); the first:\n{first}");
 }
 
@@ -86,6 +93,7 @@ fn watch(sim: &mut Simulation, steps: u64, what: &str) {
 fn steps_without_topology_changes_allocate_nothing() {
     contacting_yielding_steps();
     fracture_checks_that_insert_nothing();
+    steps_with_bonds_that_keep_their_count();
 }
 
 fn contacting_yielding_steps() {
@@ -125,5 +133,35 @@ fn fracture_checks_that_insert_nothing() {
         sim.step(10).expect("warm-up");
         watch(&mut sim, 60, &format!("12 fracture checks, {threads} threads"));
         assert_eq!(sim.insertions(), Some(0));
+    }
+}
+
+fn steps_with_bonds_that_keep_their_count() {
+    for threads in [1, 2] {
+        // the impact with crack insertion after it landed: young cracks
+        // hold bonds, which are updated and whose forces are added up in
+        // every step. A step watched alone counts when neither it nor the
+        // step before it inserted a crack or broke a bond (the step after
+        // an insertion sizes the node pass's buffers to the new mesh).
+        let mut sim = Simulation::new(impact(24, 12), threads).expect("the impact model is valid");
+        sim.step(300).expect("warm-up");
+        let (mut counted, mut last) = (0, (sim.insertions(), sim.bonds().len()));
+        let mut changed_before = true;
+        for _ in 0..400 {
+            let (ours, first) = window(&mut sim, 1);
+            let now = (sim.insertions(), sim.bonds().len());
+            let changed = now != last;
+            if !changed && !changed_before && now.1 > 0 && sim.steps() % 1000 != 0 {
+                assert_eq!(
+                    ours,
+                    0,
+                    "{ours} allocations in step {} with bonds, {threads} threads; the first:\n{first}",
+                    sim.steps()
+                );
+                counted += 1;
+            }
+            (last, changed_before) = (now, changed);
+        }
+        assert!(counted >= 20, "only {counted} steps with bonds and no change, {threads} threads");
     }
 }

@@ -7,6 +7,7 @@
 //! and energies in each step ([`Simulation::bond_forces`]). Split from
 //! `fracture.rs` (the check and the topology edits), which calls it.
 
+use fdem_contact::{Bond, BondResponse};
 use fdem_element::Vec2;
 use fdem_material::Softening;
 use rayon::prelude::*;
@@ -14,19 +15,138 @@ use rayon::prelude::*;
 use crate::fracture::FractureModel;
 use crate::simulation::Simulation;
 
-/// Adds a bond's force `f` on its node `b` (and `−f` on `a`) to the contact
-/// forces (by boundary node) of `nodes = [a, b]`, when both are on the
-/// surface.
-#[inline]
-pub(crate) fn add_bond_force(force: &mut [Vec2], index_of: &[u32], [a, b]: [u32; 2], f: Vec2) {
-    let (ia, ib) = (index_of[a as usize], index_of[b as usize]);
-    if ia != crate::NONE && ib != crate::NONE {
-        let fa = &mut force[ia as usize];
-        fa[0] -= f[0];
-        fa[1] -= f[1];
-        let fb = &mut force[ib as usize];
-        fb[0] += f[0];
-        fb[1] += f[1];
+/// Which bond ends act on each boundary node, kept per chunk of
+/// [`CHUNK`](crate::CHUNK) boundary nodes, so that the bonds' forces are
+/// added to the contact forces in parallel over those chunks, in an order
+/// that does not depend on the thread count
+/// ([`Simulation::bond_forces`], [`Simulation::add_bond_forces`]).
+///
+/// Each chunk lists its nodes' bond ends in bond order, so every boundary
+/// node gets its bonds' forces in bond order, after the contact forces:
+/// the order of the serial loop over the bonds this replaced, so the sums
+/// are the same to the bit. (The contact assembly's
+/// [`Scatter`](fdem_contact::narrow::Scatter) fits contacts, which are
+/// stored by boundary node and so already belong to a chunk; bonds are
+/// stored in insertion order and would need the same grouping by chunk,
+/// and its order, a chunk's own contributions first, then the other
+/// chunks' in chunk order, would have changed the bits.) The lists
+/// depend on the bonds' nodes and on the surface's numbering of boundary
+/// nodes: they are built again at the first sum after either changed
+/// ([`Self::invalidate`]; insertions, excavation, renumbering, restore),
+/// and bonds that break are struck out in place
+/// ([`Self::drop_broken`]). The lists keep their capacity, so the step
+/// allocates only when the bonds grow.
+#[derive(Debug, Default)]
+pub(crate) struct BondGather {
+    /// Per chunk of boundary nodes: `[j, 2k + s]` for each end of a bond on
+    /// one of its nodes, in bond order: node `j` of the chunk is end `s` of
+    /// bond `k` (`s` = 0: node `a`, which feels `−f`; 1: node `b`, `+f`).
+    /// Only bonds with both nodes on the surface are listed.
+    chunks: Vec<Vec<[u32; 2]>>,
+    /// The number of bonds the lists are for.
+    bonds: usize,
+    /// The lists are for the current bonds and surface; cleared by
+    /// [`Self::invalidate`].
+    valid: bool,
+    /// Scratch of [`Self::drop_broken`]: each bond's index after the
+    /// broken ones are removed, or [`NONE`](crate::NONE).
+    remap: Vec<u32>,
+}
+
+impl BondGather {
+    /// Marks the lists stale: to be called whenever the bonds' nodes, the
+    /// bond list (other than through [`Self::drop_broken`]) or the surface's
+    /// boundary-node numbering change. The next sum builds them again.
+    pub(crate) fn invalidate(&mut self) {
+        self.valid = false;
+    }
+
+    /// Builds the lists for `bonds` on a surface with `index_of` (mesh node
+    /// → boundary node) and `boundary_nodes` boundary nodes, unless they
+    /// are already for them.
+    fn ensure(&mut self, bonds: &[Bond], index_of: &[u32], boundary_nodes: usize) {
+        let chunks = boundary_nodes.div_ceil(crate::CHUNK);
+        if self.valid && self.bonds == bonds.len() && self.chunks.len() == chunks {
+            #[cfg(debug_assertions)]
+            {
+                let mut fresh = BondGather::default();
+                fresh.build(bonds, index_of, chunks);
+                assert!(fresh.chunks == self.chunks, "the bond gather is stale: a change did not invalidate it");
+            }
+            return;
+        }
+        self.build(bonds, index_of, chunks);
+    }
+
+    /// Builds the lists afresh (in one pass over the bonds, in bond
+    /// order), for `chunks` chunks of boundary nodes.
+    fn build(&mut self, bonds: &[Bond], index_of: &[u32], chunks: usize) {
+        self.chunks.resize_with(chunks, Vec::new);
+        self.chunks.iter_mut().for_each(Vec::clear);
+        for (k, bond) in bonds.iter().enumerate() {
+            let [ia, ib] = bond.nodes.map(|v| index_of[v as usize]);
+            if ia == crate::NONE || ib == crate::NONE {
+                continue;
+            }
+            for (s, i) in [ia, ib].into_iter().enumerate() {
+                let (c, j) = (i as usize / crate::CHUNK, i as usize % crate::CHUNK);
+                self.chunks[c].push([j as u32, 2 * k as u32 + s as u32]);
+            }
+        }
+        // room for [`Self::drop_broken`]'s numbering: breaks allocate nothing
+        self.remap.clear();
+        self.remap.reserve(bonds.len());
+        self.bonds = bonds.len();
+        self.valid = true;
+    }
+
+    /// Adds each listed bond's force `force_of(k)` (on its node `b`; `a`
+    /// gets its negative) to `force` (per boundary node), in parallel over
+    /// the chunks, each node's bonds in bond order.
+    fn add(&self, force: &mut [Vec2], force_of: impl Fn(usize) -> Vec2 + Sync) {
+        assert_eq!(force.len().div_ceil(crate::CHUNK), self.chunks.len(), "bond lists for another surface");
+        force.par_chunks_mut(crate::CHUNK).zip(self.chunks.par_iter()).for_each(|(fc, list)| {
+            for &[j, code] in list {
+                let f = force_of((code / 2) as usize);
+                let t = &mut fc[j as usize];
+                if code % 2 == 0 {
+                    t[0] -= f[0];
+                    t[1] -= f[1];
+                } else {
+                    t[0] += f[0];
+                    t[1] += f[1];
+                }
+            }
+        });
+    }
+
+    /// Strikes the bonds that broke (`responses[k].broken`) out of the
+    /// lists and numbers the others as the bond list will after the same
+    /// removal (`Vec::retain`), in parallel over the chunks: the lists stay
+    /// in bond order.
+    fn drop_broken(&mut self, responses: &[BondResponse]) {
+        let mut kept = 0u32;
+        self.remap.clear();
+        self.remap.extend(responses.iter().map(|r| {
+            if r.broken {
+                crate::NONE
+            } else {
+                kept += 1;
+                kept - 1
+            }
+        }));
+        let remap = &self.remap;
+        self.chunks.par_iter_mut().for_each(|list| {
+            list.retain_mut(|e| {
+                let k = remap[(e[1] / 2) as usize];
+                if k == crate::NONE {
+                    return false;
+                }
+                e[1] = 2 * k + e[1] % 2;
+                true
+            })
+        });
+        self.bonds = kept as usize;
     }
 }
 
@@ -215,34 +335,36 @@ impl Simulation {
     /// Adds the forces of the intact bonds at `xⁿ` to the contact forces of
     /// their (boundary) nodes, books their dissipation as fracture energy,
     /// and drops the bonds that broke. The bonds are updated in parallel
-    /// (each reads only its two nodes); their forces and energies are then
-    /// added up in bond order, so the sums do not depend on the thread
-    /// count.
+    /// (each reads only its two nodes); their forces are then added in
+    /// parallel over chunks of boundary nodes, each node's in bond order
+    /// ([`BondGather`]), beside the sums of their energies in bond order:
+    /// neither depends on the thread count, and both are what the serial
+    /// loop over the bonds gave.
     pub(crate) fn bond_forces(&mut self) {
         let Some(fr) = &mut self.fracture else { return };
         if fr.bonds.is_empty() {
             self.ledger.account.cohesive_elastic = 0.0;
             return;
         }
-        let (x, index_of) = (&self.nodes.x, &self.surface.index_of);
+        let (x, surface) = (&self.nodes.x, &self.surface);
         // grows only when the bonds do (at insertions)
         let responses = &mut fr.bond_responses;
-        responses.resize(fr.bonds.len(), fdem_contact::BondResponse::default());
+        responses.resize(fr.bonds.len(), BondResponse::default());
         fr.bonds.par_iter_mut().zip(responses.par_iter_mut()).with_min_len(crate::CHUNK).for_each(|(bond, r)| {
             let [a, b] = bond.nodes;
             *r = bond.update(x[a as usize], x[b as usize]);
         });
-        let (mut dissipated, mut elastic) = (0.0, 0.0);
+        fr.bond_gather.ensure(&fr.bonds, &surface.index_of, surface.nodes.len());
+        let (gather, responses) = (&fr.bond_gather, &fr.bond_responses);
         let force = &mut self.node_forces.contact_force;
-        let mut broken = false;
-        for (bond, r) in fr.bonds.iter().zip(responses.iter()) {
-            dissipated += r.dissipated;
-            elastic += r.elastic;
-            add_bond_force(force, index_of, bond.nodes, r.force);
-            broken |= r.broken;
-        }
+        let ((dissipated, elastic, broken), ()) = rayon::join(
+            || responses.iter().fold((0.0, 0.0, false), |(d, e, b), r| (d + r.dissipated, e + r.elastic, b | r.broken)),
+            || gather.add(force, |k| responses[k].force),
+        );
         if broken {
+            fr.bond_gather.drop_broken(&fr.bond_responses);
             let mut k = 0;
+            let responses = &fr.bond_responses;
             fr.bonds.retain(|_| {
                 k += 1;
                 !responses[k - 1].broken
@@ -254,21 +376,19 @@ impl Simulation {
 
     /// Adds the forces of the intact bonds, as the last [`Self::bond_forces`]
     /// left them (at the same positions, without updating the bonds), to
-    /// the contact forces of their nodes, in the same order: what a rebuild
-    /// of the contact forces from the contact records outside a step
-    /// (restore, renumbering) must add to give the forces the step left.
+    /// the contact forces of their nodes, in the same order (the same
+    /// [`BondGather`]): what a rebuild of the contact forces from the
+    /// contact records outside a step (restore, renumbering) must add to
+    /// give the forces the step left.
     pub(crate) fn add_bond_forces(&mut self) {
-        let Some(fr) = &self.fracture else { return };
-        let (x, index_of) = (&self.nodes.x, &self.surface.index_of);
-        for bond in &fr.bonds {
-            let [a, b] = bond.nodes;
-            add_bond_force(
-                &mut self.node_forces.contact_force,
-                index_of,
-                bond.nodes,
-                bond.force(x[a as usize], x[b as usize]),
-            );
-        }
+        let Some(fr) = &mut self.fracture else { return };
+        let (x, surface) = (&self.nodes.x, &self.surface);
+        fr.bond_gather.ensure(&fr.bonds, &surface.index_of, surface.nodes.len());
+        let bonds = &fr.bonds;
+        fr.bond_gather.add(&mut self.node_forces.contact_force, |k| {
+            let [a, b] = bonds[k].nodes;
+            bonds[k].force(x[a as usize], x[b as usize])
+        });
     }
 
     /// The law of a bond across a crack inserted at node `p`: strength
@@ -403,4 +523,111 @@ pub(crate) fn laplacian_potential(m: usize, edges: &[(usize, usize)], g: &[Vec2]
         phi[r] = [s[0] / a[r][r], s[1] / a[r][r]];
     }
     Some(phi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{CHUNK, NONE};
+
+    /// The bonds' forces added through [`BondGather`] are those of the
+    /// serial loop over the bonds it replaced (each node's bond forces in
+    /// bond order, after what the node held), bit for bit, on 1, 2 and 3
+    /// threads, over several chunks of boundary nodes, with bonds that
+    /// cross chunks and bonds with a node off the surface (left out); and
+    /// after bonds break, the lists struck in place are those built afresh
+    /// for the bonds that are left.
+    #[test]
+    fn the_gathered_bond_forces_are_the_serial_loops_on_any_thread_count() {
+        let (n, nb) = (4 * CHUNK, 2 * CHUNK + CHUNK / 3);
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        // every third mesh node is off the surface
+        let mut index_of = vec![NONE; n];
+        let mut b = 0;
+        for (v, i) in index_of.iter_mut().enumerate() {
+            if v % 3 != 2 && b < nb {
+                *i = b as u32;
+                b += 1;
+            }
+        }
+        assert_eq!(b, nb);
+        let bond = |a: u32, b: u32| Bond {
+            nodes: [a, b],
+            length: 1.0,
+            stiffness: 1.0,
+            strength: 1.0,
+            final_opening: 1.0,
+            max_opening: 0.0,
+            offset: [0.0; 2],
+            mode: None,
+        };
+        // pairs of near nodes mostly (copies of one split node), far now and
+        // then; many nodes with several bonds
+        let mut bonds: Vec<Bond> = (0..3000)
+            .map(|_| {
+                let a = (next() % n as u64) as u32;
+                let b = if next() % 8 == 0 { next() % n as u64 } else { (u64::from(a) + 1 + next() % 5) % n as u64 };
+                bond(a, if b as u32 == a { (a + 1) % n as u32 } else { b as u32 })
+            })
+            .collect();
+        let mut responses: Vec<BondResponse> = (0..bonds.len())
+            .map(|k| BondResponse {
+                force: [(next() % 2001) as f64 * 0.37 - 370.0, 1e-3 * (next() % 997) as f64 - 0.5],
+                broken: next() % 7 == 0 && k % 2 == 0,
+                ..BondResponse::default()
+            })
+            .collect();
+        let start: Vec<Vec2> = (0..nb).map(|i| [0.1 * i as f64, 3.3 - 1e-2 * i as f64]).collect();
+        let serial = |bonds: &[Bond], responses: &[BondResponse]| {
+            let mut force = start.clone();
+            for (bond, r) in bonds.iter().zip(responses) {
+                let (ia, ib) = (index_of[bond.nodes[0] as usize], index_of[bond.nodes[1] as usize]);
+                if ia != NONE && ib != NONE {
+                    let fa = &mut force[ia as usize];
+                    fa[0] -= r.force[0];
+                    fa[1] -= r.force[1];
+                    let fb = &mut force[ib as usize];
+                    fb[0] += r.force[0];
+                    fb[1] += r.force[1];
+                }
+            }
+            force
+        };
+        let want = serial(&bonds, &responses);
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut gather = BondGather::default();
+            let mut force = start.clone();
+            pool.install(|| {
+                gather.ensure(&bonds, &index_of, nb);
+                gather.add(&mut force, |k| responses[k].force);
+            });
+            assert!(force == want, "{threads} threads");
+            assert!(gather.chunks.iter().all(|list| !list.is_empty()), "every chunk has bonds");
+        }
+        // some bonds break: struck out in place, the rest renumbered
+        let mut gather = BondGather::default();
+        gather.ensure(&bonds, &index_of, nb);
+        gather.drop_broken(&responses);
+        let mut k = 0;
+        bonds.retain(|_| {
+            k += 1;
+            !responses[k - 1].broken
+        });
+        responses.retain(|r| !r.broken);
+        assert!(bonds.len() < 2900);
+        let mut fresh = BondGather::default();
+        fresh.build(&bonds, &index_of, nb.div_ceil(CHUNK));
+        assert!(gather.chunks == fresh.chunks && gather.bonds == bonds.len());
+        let mut force = start.clone();
+        gather.ensure(&bonds, &index_of, nb);
+        gather.add(&mut force, |k| responses[k].force);
+        assert!(force == serial(&bonds, &responses));
+    }
 }

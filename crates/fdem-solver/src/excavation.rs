@@ -106,6 +106,7 @@ impl Simulation {
         if let Some(fr) = &mut self.fracture {
             let mass = &self.nodes.mass;
             fr.bonds.retain(|b| b.nodes.iter().all(|&n| mass[n as usize] > 0.0));
+            fr.bond_gather.invalidate();
         }
         self.refresh_forces();
         // the loads act from now: before the whole-step velocities are kept

@@ -11,7 +11,7 @@ use fdem_fracture::{
 };
 use rayon::prelude::*;
 
-use crate::bonds::BondSeed;
+use crate::bonds::{BondGather, BondSeed};
 use crate::loads::PressureLoad;
 use crate::passes::{reference_geometry, NO_BC};
 use crate::simulation::Simulation;
@@ -68,6 +68,10 @@ pub(crate) struct FractureModel {
     /// Scratch: each bond's response in the last step ([`Simulation::bond_forces`]).
     #[serde(skip)]
     pub(crate) bond_responses: Vec<fdem_contact::BondResponse>,
+    /// Derived: which bonds act on each chunk of boundary nodes, for the
+    /// parallel sum of their forces (built again after a restore).
+    #[serde(skip)]
+    pub(crate) bond_gather: BondGather,
 }
 
 impl FractureModel {
@@ -89,6 +93,7 @@ impl FractureModel {
             factor_seen: Vec::new(),
             candidates: Vec::new(),
             bond_responses: Vec::new(),
+            bond_gather: BondGather::default(),
         }
     }
 }
@@ -106,6 +111,7 @@ impl FractureModel {
         for b in &mut self.bonds {
             b.nodes = b.nodes.map(|v| node_map[v as usize]);
         }
+        self.bond_gather.invalidate();
     }
 }
 
@@ -343,6 +349,7 @@ impl Simulation {
                 preload.push((first..fr.bonds.len(), f.clone()));
             }
         }
+        fr.bond_gather.invalidate();
         self.fracture = Some(fr);
         let m0 = m as u32;
         let mut touched: Vec<u32> =

@@ -314,6 +314,41 @@ pub(crate) struct ElementInputs<'a> {
     pub plastic: bool,
 }
 
+/// The [`ElementInputs`] of the [`Simulation`](crate::simulation::Simulation)
+/// `sim` (its nodes' positions and velocities, its elements' shapes and
+/// materials, the node→element lists, whether crack insertion is on,
+/// whether plastic laws apply), with stiffness damping `beta` and step
+/// `dt`: the one place they are gathered, so that the element pass, the
+/// force refreshes and the stable step read the same inputs.
+///
+/// A macro, not a method: every caller writes the results (stresses,
+/// forces, partial sums, frequencies) into other fields of the same
+/// `Simulation` while the inputs are borrowed. The macro's expansion
+/// borrows field by field, which the borrow checker lets live beside
+/// those writes; a method borrows the whole `Simulation`, and would need
+/// the written arrays moved out and back at each call (at the element
+/// pass also the contact model and its force buffers, which the contact
+/// assembly beside it writes).
+macro_rules! element_inputs {
+    ($sim:ident, beta: $beta:expr, dt: $dt:expr) => {
+        $crate::passes::ElementInputs {
+            x: &$sim.nodes.x,
+            v: &$sim.nodes.v,
+            conn: &$sim.elems.conn,
+            reference: &$sim.elems.reference,
+            material: &$sim.elems.material,
+            active: &$sim.elems.active,
+            materials: &$sim.materials,
+            node_elems: &$sim.node_elems,
+            insertion: $sim.fracture.is_some(),
+            beta: $beta,
+            dt: $dt,
+            plastic: !$sim.staging.elastic_stage,
+        }
+    };
+}
+pub(crate) use element_inputs;
+
 #[inline(always)]
 fn gather<T: Copy>(a: &[T], t: [u32; 3]) -> [T; 3] {
     [a[t[0] as usize], a[t[1] as usize], a[t[2] as usize]]

@@ -17,7 +17,7 @@ use crate::error::{RunError, SetupError};
 use crate::excavation::Staging;
 use crate::loads::Loads;
 use crate::model::Settings;
-use crate::passes::{self, ElementInputs, Material, NodeInputs, NO_BC};
+use crate::passes::{self, Material, NodeInputs, NO_BC};
 use crate::stable_step::Frequencies;
 
 /// Nodal arrays.
@@ -188,22 +188,9 @@ impl Simulation {
     /// Recomputes element and surface forces at the current configuration
     /// without advancing the stress.
     pub(crate) fn refresh_forces(&mut self) {
-        let Simulation { nodes, elems, ledger, .. } = self;
-        let inp = ElementInputs {
-            x: &nodes.x,
-            v: &nodes.v,
-            conn: &elems.conn,
-            reference: &elems.reference,
-            material: &elems.material,
-            active: &elems.active,
-            materials: &self.materials,
-            node_elems: &self.node_elems,
-            insertion: self.fracture.is_some(),
-            beta: 0.0,
-            dt: 0.0,
-            plastic: !self.staging.elastic_stage,
-        };
-        passes::element_pass(&inp, &mut elems.stress, &mut elems.state, &mut elems.force, &mut ledger.elem_partials);
+        let inp = passes::element_inputs!(self, beta: 0.0, dt: 0.0);
+        let Simulation { elems: Elements { stress, state, force, .. }, ledger, .. } = self;
+        passes::element_pass(&inp, stress, state, force, &mut ledger.elem_partials);
         self.surface_forces(0.0);
     }
 
@@ -212,22 +199,8 @@ impl Simulation {
     /// elements keep theirs. The caller then recomputes the pressure,
     /// contact and bond forces on the new surfaces ([`Self::surface_forces`]).
     pub(crate) fn refresh_element_forces_of(&mut self, touched: &[u32]) {
-        let Simulation { nodes, elems, .. } = self;
-        let inp = ElementInputs {
-            x: &nodes.x,
-            v: &nodes.v,
-            conn: &elems.conn,
-            reference: &elems.reference,
-            material: &elems.material,
-            active: &elems.active,
-            materials: &self.materials,
-            node_elems: &self.node_elems,
-            insertion: self.fracture.is_some(),
-            beta: 0.0,
-            dt: 0.0,
-            plastic: !self.staging.elastic_stage,
-        };
-        passes::element_forces_of(&inp, touched, &elems.stress, &mut elems.force);
+        let inp = passes::element_inputs!(self, beta: 0.0, dt: 0.0);
+        passes::element_forces_of(&inp, touched, &self.elems.stress, &mut self.elems.force);
     }
 
     /// Pressure and contact forces at the current configuration; `dt` is the
@@ -421,38 +394,18 @@ impl Simulation {
         // depend on how the two interleave (their clocks overlap).
         let searched = self.contact.as_mut().map(|c| search_contact(c, &self.surface, &self.nodes, dt));
         let contact = {
+            let inp = passes::element_inputs!(self, beta: self.settings.stiffness_damping, dt: dt);
             let Simulation {
-                nodes,
-                elems,
+                elems: Elements { stress, state, force, .. },
                 ledger,
                 contact,
                 node_forces: NodeForces { contact_force, contact_damping_force, contact_damped, .. },
                 ..
             } = self;
-            let inp = ElementInputs {
-                x: &nodes.x,
-                v: &nodes.v,
-                conn: &elems.conn,
-                reference: &elems.reference,
-                material: &elems.material,
-                active: &elems.active,
-                materials: &self.materials,
-                node_elems: &self.node_elems,
-                insertion: self.fracture.is_some(),
-                beta: self.settings.stiffness_damping,
-                dt,
-                plastic: !self.staging.elastic_stage,
-            };
             let (elements, contact) = rayon::join(
                 || {
                     let clock = Instant::now();
-                    passes::element_pass(
-                        &inp,
-                        &mut elems.stress,
-                        &mut elems.state,
-                        &mut elems.force,
-                        &mut ledger.elem_partials,
-                    );
+                    passes::element_pass(&inp, stress, state, force, &mut ledger.elem_partials);
                     clock.elapsed().as_secs_f64()
                 },
                 || {

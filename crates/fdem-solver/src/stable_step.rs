@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use fdem_element::Vec2;
 
 use crate::contact::ContactModel;
-use crate::passes::{self, ElementInputs};
+use crate::passes;
 use crate::simulation::Simulation;
 
 /// The highest frequencies the stable step is worked out from, kept
@@ -112,25 +112,12 @@ impl Simulation {
     fn critical_step_of(&mut self, touched: Option<&[u32]>, nodes: Option<&[u32]>) -> f64 {
         let pool = Arc::clone(&self.pool);
         let element_crit = pool.install(|| {
-            let Simulation { nodes, elems, frequencies: Frequencies { omega, .. }, .. } = self;
-            let inp = ElementInputs {
-                x: &nodes.x,
-                v: &nodes.v,
-                conn: &elems.conn,
-                reference: &elems.reference,
-                material: &elems.material,
-                active: &elems.active,
-                materials: &self.materials,
-                node_elems: &self.node_elems,
-                insertion: self.fracture.is_some(),
-                beta: self.settings.stiffness_damping,
-                dt: 0.0,
-                plastic: !self.staging.elastic_stage,
-            };
+            let inp = passes::element_inputs!(self, beta: self.settings.stiffness_damping, dt: 0.0);
+            let (scale, omega) = (&self.elems.mass_scale, &mut self.frequencies.omega);
             match touched {
-                None => passes::element_frequencies(&inp, &elems.mass_scale, omega),
+                None => passes::element_frequencies(&inp, scale, omega),
                 Some(list) => {
-                    passes::element_frequencies_of(&inp, &elems.mass_scale, list, omega);
+                    passes::element_frequencies_of(&inp, scale, list, omega);
                     passes::critical_from_frequencies(omega, self.settings.stiffness_damping)
                 }
             }

@@ -270,6 +270,10 @@ impl crate::simulation::Simulation {
             self.node_forces.contact_damped.resize(nb, 0);
         }
         self.surface = surface;
+        if let Some(fr) = &mut self.fracture {
+            // by boundary node: the numbering changed
+            fr.bond_gather.invalidate();
+        }
         self.ledger.size_partials(n, m);
         self.frequencies.omega.resize(m, 0.0);
         self.elems.force.resize(3 * m, [0.0; 2]);
