@@ -512,7 +512,11 @@ impl Simulation {
                 c.facet_laws.insert(ancestor_pair(anc, p, w), c.crack_law);
             }
         }
-        self.rebuild_structure(&origins, Some(&touched_nodes));
+        let mut touched_elements: Vec<u32> =
+            edits.changed.iter().map(|&(e, _)| e).chain(m0 as u32..self.elems.conn.len() as u32).collect();
+        touched_elements.sort_unstable();
+        touched_elements.dedup();
+        self.rebuild_structure(&origins, Some((&touched_nodes, &touched_elements)));
         self.ledger.account.remeshing += before - kinetic(self);
     }
 

@@ -198,45 +198,80 @@ impl crate::simulation::Simulation {
         )
     }
 
+    /// The node→element lists after a topology change that altered the
+    /// `elements` listed (changed or added, ascending) and with them the
+    /// `nodes` listed (ascending, new nodes included), from the lists
+    /// before it (`self.node_elems`): only the touched nodes' rows are
+    /// worked out again (the items of untouched elements they held, and
+    /// those of the listed elements that hold them, ascending), the rest
+    /// copied. The same lists as [`active_node_elements`] from scratch (a
+    /// debug build checks it), without its pass over every element's three
+    /// corners at each insertion check.
+    fn node_elements_after(&self, nodes: &[u32], elements: &[u32]) -> fdem_mesh::Csr {
+        let (conn, active) = (&self.elems.conn, &self.elems.active);
+        let mut held: Vec<(u32, u32)> = elements
+            .iter()
+            .filter(|&&e| active[e as usize])
+            .flat_map(|&e| (0..3u32).map(move |k| (conn[e as usize][k as usize], 3 * e + k)))
+            .collect();
+        held.sort_unstable();
+        let old = &self.node_elems;
+        let mut next = 0;
+        let lists = old.with_rows_replaced(self.nodes.x.len(), nodes, |v, out| {
+            let start = out.len();
+            if (v as usize) < old.rows() {
+                out.extend(old.row(v as usize).iter().filter(|&&item| elements.binary_search(&(item / 3)).is_err()));
+            }
+            while next < held.len() && held[next].0 == v {
+                out.push(held[next].1);
+                next += 1;
+            }
+            out[start..].sort_unstable();
+        });
+        debug_assert_eq!(next, held.len(), "a changed element holds a node not listed as touched");
+        lists
+    }
+
     /// Rebuilds everything derived from the connectivity after a topology
     /// change except forces and the stable step: node→element lists, lumped
     /// masses, the free surfaces (facet laws by ancestor pairs), pressure
     /// facets, contact buffers and friction memory, per-chunk buffers.
     /// `origins` lists the nodes this change created, ascending, each with
     /// the old node it came from: their contacts carry on. `touched`, when
-    /// given, lists (ascending, deduplicated) every node whose elements the
-    /// change altered: the nodes of the changed elements' old and new
-    /// connectivity and of the added elements, new nodes included. Only the
-    /// free edges of the elements around them are worked out again
-    /// ([`build_surface`]). `None` (excavation) tests every edge.
-    pub(crate) fn rebuild_structure(&mut self, origins: &[(u32, u32)], touched: Option<&[u32]>) {
+    /// given, lists (each ascending, deduplicated) every node whose
+    /// elements the change altered (the nodes of the changed elements' old
+    /// and new connectivity and of the added elements, new nodes included)
+    /// and those elements (changed and added). Only these nodes' element
+    /// lists ([`Self::node_elements_after`]) and the free edges of the
+    /// elements around them ([`build_surface`]) are worked out again.
+    /// `None` (excavation) builds the lists from scratch and tests every
+    /// edge.
+    pub(crate) fn rebuild_structure(&mut self, origins: &[(u32, u32)], touched: Option<(&[u32], &[u32])>) {
         let n = self.nodes.x.len();
         let m = self.elems.conn.len();
-        // the masses from scratch, in ascending element order: after a
-        // renumbering the stored sums are in the old order, and a node's
-        // mass must not depend on when the mesh was last renumbered (the
-        // old ones kept to find the contact frequencies that stay). Both
-        // passes are serial and independent: side by side.
+        self.node_elems = match touched {
+            Some((nodes, elements)) => self.node_elements_after(nodes, elements),
+            None => active_node_elements(n, &self.elems.conn, &self.elems.active),
+        };
+        #[cfg(debug_assertions)]
+        {
+            let fresh = active_node_elements(n, &self.elems.conn, &self.elems.active);
+            assert!(self.node_elems == fresh, "node→element lists differ from a build from scratch");
+        }
+        let touched = touched.map(|(nodes, _)| nodes);
+        // the masses from scratch, per node in ascending element order (the
+        // lists' order), the sums the serial element loop of setup makes:
+        // after a renumbering the stored sums are in the old order, and a
+        // node's mass must not depend on when the mesh was last renumbered
+        // (the old ones kept to find the contact frequencies that stay)
         std::mem::swap(&mut self.nodes.mass, &mut self.frequencies.omega_carry.old_mass);
         let mut mass = std::mem::take(&mut self.nodes.mass);
+        mass.clear();
+        mass.resize(n, 0.0);
         let this = &*self;
-        let (node_elems, ()) = rayon::join(
-            || active_node_elements(n, &this.elems.conn, &this.elems.active),
-            || {
-                mass.clear();
-                mass.resize(n, 0.0);
-                for (e, t) in this.elems.conn.iter().enumerate() {
-                    if !this.elems.active[e] {
-                        continue;
-                    }
-                    let nodal = this.nodal_mass_of(e);
-                    for &v in t {
-                        mass[v as usize] += nodal;
-                    }
-                }
-            },
-        );
-        self.node_elems = node_elems;
+        mass.par_iter_mut().enumerate().with_min_len(crate::CHUNK).for_each(|(v, mv)| {
+            *mv = this.node_elems.row(v).iter().fold(0.0, |s, &item| s + this.nodal_mass_of((item / 3) as usize));
+        });
         self.nodes.mass = mass;
         let dirty = touched.map(|nodes| dirty_elements(&self.node_elems, nodes));
         let ancestor = &self.ancestor;
