@@ -269,8 +269,15 @@ impl crate::simulation::Simulation {
         mass.clear();
         mass.resize(n, 0.0);
         let this = &*self;
+        // each element's share once (a topology change may allocate)
+        let mut share = vec![0.0; m];
+        share.par_iter_mut().enumerate().with_min_len(crate::CHUNK).for_each(|(e, s)| {
+            if this.elems.active[e] {
+                *s = this.nodal_mass_of(e);
+            }
+        });
         mass.par_iter_mut().enumerate().with_min_len(crate::CHUNK).for_each(|(v, mv)| {
-            *mv = this.node_elems.row(v).iter().fold(0.0, |s, &item| s + this.nodal_mass_of((item / 3) as usize));
+            *mv = this.node_elems.row(v).iter().fold(0.0, |s, &item| s + share[(item / 3) as usize]);
         });
         self.nodes.mass = mass;
         let dirty = touched.map(|nodes| dirty_elements(&self.node_elems, nodes));
