@@ -45,7 +45,11 @@ Checks (``main`` returns them, tests/test_examples.py tests them):
   softening is steepest, and the ringing left);
 - the same two on the pad's reaction alone, and the largest difference
   between the pad's and the supports' reactions beyond half the peak;
-- the work of the load, for the energy a crack took.
+- the work of the load, for the energy a crack took;
+- and, run far past the peak (``work_of_fracture``), the fracture energy
+  against G_f times the ligament, less what the ligament still bridges
+  (``bridged_energy``): the work-of-fracture test by which Petersson
+  measured G_f.
 
     python examples/three_point_bending.py [--size 0.01] [--insert-at 0.02] [--softening bilinear] [--out beam_output]
 """
@@ -183,6 +187,59 @@ def model(
     smooth = fdem.Interface(friction=0.0, normal_stiffness=k_n)
     beam.contact(rough, interfaces={"beam_top": smooth, "pad_faces": smooth}).fracture(**options)
     return beam
+
+
+def bridged_energy(deflection: float, softening: str = "bilinear") -> float:
+    """The fracture energy (J/m) still to be dissipated in the ligament once
+    mid-span has deflected ``deflection`` (m) well past the peak, for two
+    rigid halves turning about the top of the mid-span section: each turns
+    by φ = 2δ/S, the crack opens by w = 2φh at depth h below the top, and
+    what the ligament has still to dissipate is G_f ∫ (1 − D(w(h))) dh =
+    (1/2φ) ∫₀^{w_c} w σ(w) dw (by parts; D is the share of G_f the
+    softening curve σ(w) has dissipated at w, and the crack is taken as
+    through the ligament, which it is when the load is a small part of the
+    peak). The halves' own bending and the depth of the compression zone
+    are left out, so it is the limit as the deflection grows: a beam in a
+    work-of-fracture test (RILEM TC-50, Hillerborg 1985) has dissipated
+    G_f (D − a) less this."""
+    w_c = (3.6 if softening == "bilinear" else 2.0) * GF / FT
+    w = np.linspace(0.0, w_c, 20001)
+    if softening == "bilinear":
+        w_k = 0.8 * GF / FT
+        sigma = np.where(w <= w_k, FT * (1 - (2 / 3) * w / w_k), (FT / 3) * (w_c - w) / (w_c - w_k))
+    else:
+        sigma = FT * (1 - w / w_c)
+    moment = float(np.sum(0.5 * (w[1:] * sigma[1:] + w[:-1] * sigma[:-1]) * np.diff(w)))
+    return moment / (2 * (2 * deflection / SPAN))
+
+
+def work_of_fracture(
+    size: float = 0.01, deflection: float = 5e-3, *, softening: str = "bilinear", threads: int | None = None
+) -> dict[str, float]:
+    """Runs the beam to ``deflection`` (m, several times the peak's) and
+    returns the fracture energy it dissipated (J/m), against G_f times the
+    ligament (D − a) and against that less :func:`bridged_energy`: a beam
+    broken through its ligament dissipates G_f per unit of it, on every
+    mesh (issue 33, point 4; Petersson measured G_f so, from the work of
+    the load on such beams)."""
+    beam = model(size, softening=softening)
+    omega = (math.pi / SPAN) ** 2 * math.sqrt(E * DEPTH**2 / 12 / RHO)
+    sim = fdem.Simulation(beam, threads=threads, mass_damping=2 * 0.1 * omega)
+    start = time.perf_counter()
+    sim.run(until=5e-3 + deflection / SPEED, progress=False)
+    fracture = sim.energies()["fracture"]
+    ligament = GF * (DEPTH - NOTCH)
+    expected = ligament - bridged_energy(deflection, softening)
+    return {
+        "fracture": fracture,
+        "gf_ligament": ligament,
+        "expected": expected,
+        "ratio_to_ligament": fracture / ligament,
+        "ratio_to_expected": fracture / expected,
+        "crack_length_vertical": sim.crack_length(along=(0.0, 1.0)),
+        "cracks": float(sim.insertions),
+        "wall_s": time.perf_counter() - start,
+    }
 
 
 def closed_form_stiffness() -> float:

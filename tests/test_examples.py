@@ -168,6 +168,55 @@ def test_notched_beam_peak_against_petersson(beam_runs):
         assert r["peak_load"] == pytest.approx(r["petersson_peak"], rel=0.10)
 
 
+def test_bridged_energy_of_the_broken_beam():
+    """The energy a broken notched beam has still to dissipate at large
+    deflection (rigid halves turning about the top of the ligament),
+    against the closed forms of the moment ∫ w σ(w) dw: f_t w_c²/6 for
+    linear softening; f_t w_k² (1/2 − 2/9) + (f_t/3)(w_c − w_k)(2 w_k +
+    w_c)/6 for Petersson's bilinear curve (to 1e-6); it falls as 1/δ."""
+    beam = load("three_point_bending")
+    ft, gf, span = beam.FT, beam.GF, beam.SPAN
+    phi = 2 * 5e-3 / span
+    w_c = 2 * gf / ft
+    assert beam.bridged_energy(5e-3, "linear") == pytest.approx(ft * w_c**2 / 6 / (2 * phi), rel=1e-6)
+    w_k, w_c = 0.8 * gf / ft, 3.6 * gf / ft
+    moment = ft * w_k**2 * (1 / 2 - 2 / 9) + (ft / 3) * (w_c - w_k) * (2 * w_k + w_c) / 6
+    assert beam.bridged_energy(5e-3) == pytest.approx(moment / (2 * phi), rel=1e-6)
+    assert beam.bridged_energy(2.5e-3) == pytest.approx(2 * beam.bridged_energy(5e-3), rel=1e-12)
+
+
+@pytest.mark.slow
+def test_notched_beam_work_of_fracture():
+    """Issue 33 (4) on the notched beam: broken through its ligament, the
+    beam has dissipated G_f per unit of ligament, as in Petersson's
+    work-of-fracture tests. At 5 mm deflection (15 times the peak's) the
+    fracture energy is within 10% of G_f (D − a) and within 3% of that
+    less what is still bridged (``bridged_energy``). Measured 2026-11-26
+    on 20 mm: 11.89 J/m, 0.959 G_f (D − a), 0.995 of 11.94 J/m expected
+    (284 s at one thread on the 2-core Zen 5 VM). On 7 mm: 0.949 at 3 mm
+    against 0.939 expected; on 10 mm the beam cracks beside its ligament
+    as well and dissipates more (1.151 at 3 mm; docs/fracture.md)."""
+    r = load("three_point_bending").work_of_fracture(0.02, 5e-3, threads=1)
+    assert r["ratio_to_ligament"] == pytest.approx(1.0, rel=0.10), r
+    assert r["ratio_to_expected"] == pytest.approx(1.0, rel=0.03), r
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 33 (4), open: on 10 mm the crack branches beside the ligament and the beam dissipates "
+    "1.15 G_f (D - a) by 3 mm, 1.23 times what the broken ligament accounts for (docs/fracture.md)",
+)
+def test_notched_beam_work_of_fracture_on_10_mm():
+    """As :func:`test_notched_beam_work_of_fracture` on 10 mm, at 3 mm
+    deflection (about 10 min at one thread): within 10% of G_f (D − a)
+    less what is still bridged. Measured 2026-11-26: 14.27 J/m against
+    11.64 expected (+23%); 7 mm stays within 10% of G_f (D − a) to 5 mm
+    (1.026), 6.5% above the expected."""
+    r = load("three_point_bending").work_of_fracture(0.01, 3e-3, threads=1)
+    assert r["ratio_to_expected"] == pytest.approx(1.0, rel=0.10), r
+
+
 def test_caving_ensemble_example(tmp_path):
     """Issue 35 (4) at a tiny size (joint spacings ×8, 4 m elements,
     to 0.06 s): 2 realisations × 2 friction angles on a local cluster, every
