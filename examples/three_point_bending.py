@@ -57,6 +57,7 @@ Checks (``main`` returns them, tests/test_examples.py tests them):
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import time
 from pathlib import Path
@@ -189,6 +190,13 @@ def model(
     return beam
 
 
+def simulation(beam: fdem.Model, threads: int | None = None) -> fdem.Simulation:
+    """The beam's simulation, mass-damped at a tenth of critical in the
+    free span's first bending mode."""
+    omega = (math.pi / SPAN) ** 2 * math.sqrt(E * DEPTH**2 / 12 / RHO)  # first bending mode (rad/s)
+    return fdem.Simulation(beam, threads=threads, mass_damping=2 * 0.1 * omega)
+
+
 def bridged_energy(deflection: float, softening: str = "bilinear") -> float:
     """The fracture energy (J/m) still to be dissipated in the ligament once
     mid-span has deflected ``deflection`` (m) well past the peak, for two
@@ -196,20 +204,22 @@ def bridged_energy(deflection: float, softening: str = "bilinear") -> float:
     by φ = 2δ/S, the crack opens by w = 2φh at depth h below the top, and
     what the ligament has still to dissipate is G_f ∫ (1 − D(w(h))) dh =
     (1/2φ) ∫₀^{w_c} w σ(w) dw (by parts; D is the share of G_f the
-    softening curve σ(w) has dissipated at w, and the crack is taken as
-    through the ligament, which it is when the load is a small part of the
-    peak). The halves' own bending and the depth of the compression zone
-    are left out, so it is the limit as the deflection grows: a beam in a
-    work-of-fracture test (RILEM TC-50, Hillerborg 1985) has dissipated
-    G_f (D − a) less this."""
-    w_c = (3.6 if softening == "bilinear" else 2.0) * GF / FT
-    w = np.linspace(0.0, w_c, 20001)
-    if softening == "bilinear":
-        w_k = 0.8 * GF / FT
-        sigma = np.where(w <= w_k, FT * (1 - (2 / 3) * w / w_k), (FT / 3) * (w_c - w) / (w_c - w_k))
-    else:
-        sigma = FT * (1 - w / w_c)
-    moment = float(np.sum(0.5 * (w[1:] * sigma[1:] + w[:-1] * sigma[:-1]) * np.diff(w)))
+    softening curve σ(w) of :func:`concrete` has dissipated at w, and the
+    crack is taken as through the ligament, which it is when the load is a
+    small part of the peak). The halves' own bending and the depth of the
+    compression zone are left out, so it is the limit as the deflection
+    grows: a beam in a work-of-fracture test (RILEM TC-50, Hillerborg
+    1985) has dissipated G_f (D − a) less this."""
+    rock = concrete(softening)
+    w_c = rock.critical_opening
+    kink = rock.softening_kink or (0.5, 0.5)  # linear: a "kink" on the line
+    # the curve's corners (opening, traction); w σ(w) is quadratic between
+    # them, so Simpson's rule on each piece is exact
+    corners = [(0.0, FT), (kink[1] * w_c, kink[0] * FT), (w_c, 0.0)]
+    moment = 0.0
+    for (wa, sa), (wb, sb) in itertools.pairwise(corners):
+        wm, sm = 0.5 * (wa + wb), 0.5 * (sa + sb)
+        moment += (wb - wa) / 6 * (wa * sa + 4 * wm * sm + wb * sb)
     return moment / (2 * (2 * deflection / SPAN))
 
 
@@ -222,9 +232,7 @@ def work_of_fracture(
     broken through its ligament dissipates G_f per unit of it, on every
     mesh (issue 33, point 4; Petersson measured G_f so, from the work of
     the load on such beams)."""
-    beam = model(size, softening=softening)
-    omega = (math.pi / SPAN) ** 2 * math.sqrt(E * DEPTH**2 / 12 / RHO)
-    sim = fdem.Simulation(beam, threads=threads, mass_damping=2 * 0.1 * omega)
+    sim = simulation(model(size, softening=softening), threads)
     start = time.perf_counter()
     sim.run(until=5e-3 + deflection / SPEED, progress=False)
     fracture = sim.energies()["fracture"]
@@ -273,8 +281,7 @@ def main(
     (see the module's docstring) and writes ``beam.csv`` and ``beam.png``
     into ``out`` if given."""
     beam = model(size, insert_at=insert_at, check_every=check_every, softening=softening)
-    omega = (math.pi / SPAN) ** 2 * math.sqrt(E * DEPTH**2 / 12 / RHO)  # first bending mode (rad/s)
-    sim = fdem.Simulation(beam, threads=threads, mass_damping=2 * 0.1 * omega)
+    sim = simulation(beam, threads)
     start, until = time.perf_counter(), 5e-3 + deflection / SPEED
     rows = []
     while sim.time < until:

@@ -173,15 +173,15 @@ def test_bridged_energy_of_the_broken_beam():
     deflection (rigid halves turning about the top of the ligament),
     against the closed forms of the moment ∫ w σ(w) dw: f_t w_c²/6 for
     linear softening; f_t w_k² (1/2 − 2/9) + (f_t/3)(w_c − w_k)(2 w_k +
-    w_c)/6 for Petersson's bilinear curve (to 1e-6); it falls as 1/δ."""
+    w_c)/6 for Petersson's bilinear curve (to 1e-12); it falls as 1/δ."""
     beam = load("three_point_bending")
     ft, gf, span = beam.FT, beam.GF, beam.SPAN
     phi = 2 * 5e-3 / span
     w_c = 2 * gf / ft
-    assert beam.bridged_energy(5e-3, "linear") == pytest.approx(ft * w_c**2 / 6 / (2 * phi), rel=1e-6)
+    assert beam.bridged_energy(5e-3, "linear") == pytest.approx(ft * w_c**2 / 6 / (2 * phi), rel=1e-12)
     w_k, w_c = 0.8 * gf / ft, 3.6 * gf / ft
     moment = ft * w_k**2 * (1 / 2 - 2 / 9) + (ft / 3) * (w_c - w_k) * (2 * w_k + w_c) / 6
-    assert beam.bridged_energy(5e-3) == pytest.approx(moment / (2 * phi), rel=1e-6)
+    assert beam.bridged_energy(5e-3) == pytest.approx(moment / (2 * phi), rel=1e-12)
     assert beam.bridged_energy(2.5e-3) == pytest.approx(2 * beam.bridged_energy(5e-3), rel=1e-12)
 
 

@@ -299,8 +299,7 @@ impl Simulation {
         let old: Vec<(f64, Vec2)> =
             nodes.iter().map(|&v| (self.nodes.mass[v as usize], self.whole_step_velocity(v as usize))).collect();
         for &v in &nodes {
-            // in ascending element order, as `rebuild_structure` sums
-            let m = self.node_elems.row(v as usize).iter().fold(0.0, |m, &i| m + self.nodal_mass_of((i / 3) as usize));
+            let m = crate::topology::node_mass(&self.node_elems, v as usize, |e| self.nodal_mass_of(e));
             self.nodes.mass[v as usize] = m;
         }
         if started {

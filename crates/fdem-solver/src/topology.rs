@@ -185,6 +185,15 @@ pub(crate) fn dirty_elements(node_elems: &fdem_mesh::Csr, nodes: &[u32]) -> Vec<
     dirty
 }
 
+/// Node `v`'s lumped mass (kg per unit thickness): the shares `share(e)`
+/// of its elements added in the order of its node→element list
+/// (ascending element), the one order every mass is summed in, so that a
+/// mass worked out again for a few nodes has the bits of a rebuild's.
+#[inline]
+pub(crate) fn node_mass(node_elems: &fdem_mesh::Csr, v: usize, share: impl Fn(usize) -> f64) -> f64 {
+    node_elems.row(v).iter().fold(0.0, |m, &item| m + share((item / 3) as usize))
+}
+
 impl crate::simulation::Simulation {
     /// The lumped mass element `e` gives each of its nodes (kg per unit
     /// thickness): its density times its mass-scaling factor, over its
@@ -277,7 +286,7 @@ impl crate::simulation::Simulation {
             }
         });
         mass.par_iter_mut().enumerate().with_min_len(crate::CHUNK).for_each(|(v, mv)| {
-            *mv = this.node_elems.row(v).iter().fold(0.0, |s, &item| s + share[(item / 3) as usize]);
+            *mv = node_mass(&this.node_elems, v, |e| share[e]);
         });
         self.nodes.mass = mass;
         let dirty = touched.map(|nodes| dirty_elements(&self.node_elems, nodes));
