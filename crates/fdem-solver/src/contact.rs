@@ -384,11 +384,11 @@ impl ContactModel {
             // elements)
             // (without `touched` none are flagged, and `changed` stays
             // empty: then no node is untouched, below)
-            let mut hit = vec![0u64; if touched.is_some() { x.len().div_ceil(64) } else { 0 }];
-            for &v in touched.unwrap_or_default() {
-                hit[v as usize / 64] |= 1 << (v % 64);
-            }
-            let is_hit = |v: u32| (hit[v as usize / 64] >> (v % 64)) & 1 == 1;
+            let hit = crate::topology::NodeBits::of(
+                if touched.is_some() { x.len() } else { 0 },
+                touched.unwrap_or_default().iter().copied(),
+            );
+            let is_hit = |v: u32| hit.has(v);
             if touched.is_some() {
                 self.changed
                     .par_extend(new.facets.par_iter().map(|f| u8::from(is_hit(f.nodes[0]) || is_hit(f.nodes[1]))));
