@@ -388,10 +388,9 @@ impl ContactModel {
                 if touched.is_some() { x.len() } else { 0 },
                 touched.unwrap_or_default().iter().copied(),
             );
-            let is_hit = |v: u32| hit.has(v);
             if touched.is_some() {
                 self.changed
-                    .par_extend(new.facets.par_iter().map(|f| u8::from(is_hit(f.nodes[0]) || is_hit(f.nodes[1]))));
+                    .par_extend(new.facets.par_iter().map(|f| u8::from(hit.has(f.nodes[0]) || hit.has(f.nodes[1]))));
             }
             let changed = &self.changed;
             let old_states = [&self.states, &self.corner_states];
@@ -432,7 +431,9 @@ impl ContactModel {
             // whether the node `node` (boundary index `b`) and its own
             // facets are untouched (never without `touched`)
             let untouched = |b: usize, node: u32| {
-                !changed.is_empty() && !is_hit(node) && new.node_facets.row(b).iter().all(|&k| changed[k as usize] == 0)
+                !changed.is_empty()
+                    && !hit.has(node)
+                    && new.node_facets.row(b).iter().all(|&k| changed[k as usize] == 0)
             };
             // every node's memory by itself (parallel: each writes its own
             // entries; 5 ms a change at the paper's scale when serial)

@@ -168,14 +168,10 @@ pub(crate) fn resolve_pressures(
     // names, and are passed over without a look in the map (1 ms of every
     // insertion at the paper's scale)
     let top = loads.iter().flat_map(|p| p.nodes).max().map_or(0, |v| v as usize + 1);
-    let mut loaded = vec![0u64; top.div_ceil(64)];
-    for v in loads.iter().flat_map(|p| p.nodes) {
-        loaded[v as usize / 64] |= 1 << (v % 64);
-    }
-    let is_loaded = |v: u32| loaded.get(v as usize / 64).is_some_and(|w| (w >> (v % 64)) & 1 == 1);
+    let loaded = NodeBits::of(top, loads.iter().flat_map(|p| p.nodes));
     for f in &surface.facets {
         let (a, b) = ancestor_pair(ancestor, f.nodes[0], f.nodes[1]);
-        if !(is_loaded(a) && is_loaded(b)) {
+        if !(loaded.has(a) && loaded.has(b)) {
             continue;
         }
         if let Some(list) = by_pair.get_mut(&(a, b)) {
@@ -397,7 +393,7 @@ impl crate::simulation::Simulation {
         let (mass, old_mass) = (&self.nodes.mass, &carry.old_mass);
         // (a binary search in `touched` per boundary node was 0.4% of a
         // fragmenting impact's run, serial)
-        let touched = crate::topology::NodeBits::of(mass.len(), touched.iter().copied());
+        let touched = NodeBits::of(mass.len(), touched.iter().copied());
         carry.spare.clear();
         for &v in &new.nodes {
             let i = v as usize;
