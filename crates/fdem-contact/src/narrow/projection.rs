@@ -6,8 +6,8 @@
 
 use rayon::prelude::*;
 
-use crate::surface::Surface;
-use crate::{Vec2, CHUNK, SMOOTH_COS};
+use crate::surface::{Surface, MANY};
+use crate::{Vec2, CHUNK, NONE, SMOOTH_COS};
 
 /// Slack on the projection parameter `ξ` (fraction of the facet): a node a
 /// little past the end of a surface still bears on its last facet (its
@@ -123,17 +123,7 @@ pub(super) fn node_normal(surface: &Surface, frames: &[FacetFrame], b: usize) ->
 /// the next without the entry check (rank 1 in `evaluate_node`); at a sharp
 /// corner the slack keeps two blocks' aligned corners in contact.
 #[inline]
-pub(super) fn corner_gap(
-    surface: &Surface,
-    x: &[Vec2],
-    frames: &[FacetFrame],
-    f: u32,
-    at_end: bool,
-    s: Vec2,
-) -> Option<f64> {
-    let [a, b] = surface.facets[f as usize].nodes;
-    let v = if at_end { b } else { a };
-    let bv = surface.index_of[v as usize];
+pub(super) fn corner_gap(surface: &Surface, frames: &[FacetFrame], f: u32, at_end: bool, s: Vec2) -> Option<f64> {
     let d = frames[f as usize].t;
     // the turn from the first facet along the surface to the second: from
     // `f` to the next one past its end, from the previous one to `f` before
@@ -143,30 +133,42 @@ pub(super) fn corner_gap(
         let cross = d[0] * e[1] - d[1] * e[0];
         (if at_end { cross } else { -cross }, d[0] * e[0] + d[1] * e[1])
     };
-    // At a node where the body touches itself (four facets) two facets
-    // qualify; the one on the same wedge of the body turns most to the left
-    // (walking with the body on the left, the boundary of one wedge turns
-    // left of the other's). Chosen by geometry, not by index, so that it
-    // does not depend on the numbering.
-    let mut next = surface.node_facets.row(bv as usize).iter().copied().filter(|&k| {
-        let [p, q] = surface.facets[k as usize].nodes;
-        k != f && if at_end { p == v } else { q == v }
-    });
-    let angle = |k: u32| {
-        let (sin, cos) = turn(k);
-        sin.atan2(cos)
-    };
-    let mut k = next.next()?;
-    for other in next {
-        if angle(other) > angle(k) {
-            k = other;
+    let k = match surface.links[f as usize][usize::from(at_end)] {
+        NONE => return None,
+        MANY => {
+            // At a node where the body touches itself (four facets) two
+            // facets qualify; the one on the same wedge of the body turns
+            // most to the left (walking with the body on the left, the
+            // boundary of one wedge turns left of the other's). Chosen by
+            // geometry, not by index, so that it does not depend on the
+            // numbering.
+            let [a, b] = surface.facets[f as usize].nodes;
+            let v = if at_end { b } else { a };
+            let bv = surface.index_of[v as usize];
+            let mut next = surface.node_facets.row(bv as usize).iter().copied().filter(|&k| {
+                let [p, q] = surface.facets[k as usize].nodes;
+                k != f && if at_end { p == v } else { q == v }
+            });
+            let angle = |k: u32| {
+                let (sin, cos) = turn(k);
+                sin.atan2(cos)
+            };
+            let mut k = next.next()?;
+            for other in next {
+                if angle(other) > angle(k) {
+                    k = other;
+                }
+            }
+            k
         }
-    }
-    let p = surface.facets[k as usize].nodes[0];
-    let e = frames[k as usize].t;
+        k => k,
+    };
+    // the frame's first point is that node's position, to the bit
+    let frame = &frames[k as usize];
+    let e = frame.t;
     let turn = turn(k).0;
     let smooth = d[0] * e[0] + d[1] * e[1] >= SMOOTH_COS;
-    (turn > 0.0 && smooth).then(|| frames[k as usize].project(s, x[p as usize]).1)
+    (turn > 0.0 && smooth).then(|| frame.project(s, frame.a).1)
 }
 
 /// The projection test of a candidate: the node projects onto the facet

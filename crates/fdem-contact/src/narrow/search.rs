@@ -237,7 +237,7 @@ impl<'i, 'a> Search<'i, 'a> {
                 continue;
             }
             if !on_facet {
-                let g = *corner.get_or_insert_with(|| corner_gap(inp.surface, inp.x, inp.frames, f, xi > 1.0, self.s));
+                let g = *corner.get_or_insert_with(|| corner_gap(inp.surface, inp.frames, f, xi > 1.0, self.s));
                 match g {
                     Some(g) if g >= 0.0 => return,
                     Some(g) => c.gap = gap.max(g),
