@@ -167,40 +167,38 @@ impl Surface {
         for f in &mut self.facets {
             f.ends = f.nodes.map(|n| index_of[n as usize]);
         }
-        self.find_faces(x_ref);
-        self.find_links();
-    }
-
-    /// Fills [`Surface::links`]: per facet, the facets of its first node
-    /// that end there and those of its second node that start there.
-    fn find_links(&mut self) {
-        let (facets, node_facets) = (&self.facets, &self.node_facets);
-        self.links = facets
-            .par_iter()
-            .enumerate()
+        // per boundary node, the facet ending at it and the one starting
+        // from it ([`NONE`] or [`MANY`] where not one): both the corners and
+        // the links read them
+        let (nodes, facets, node_facets) = (&self.nodes, &self.facets, &self.node_facets);
+        let at: Vec<[u32; 2]> = (0..nodes.len())
+            .into_par_iter()
             .with_min_len(crate::CHUNK)
-            .map(|(f, facet)| {
-                [(0, 1), (1, 0)].map(|(end, other)| {
-                    let v = facet.nodes[end];
-                    let mut found = NONE;
-                    for &k in node_facets.row(facet.ends[end] as usize) {
-                        if k as usize != f && facets[k as usize].nodes[other] == v {
-                            found = if found == NONE { k } else { MANY };
-                        }
-                    }
-                    found
-                })
+            .map(|b| {
+                let mut io = [NONE; 2];
+                for &k in node_facets.row(b) {
+                    let slot = usize::from(facets[k as usize].nodes[1] != nodes[b]);
+                    io[slot] = if io[slot] == NONE { k } else { MANY };
+                }
+                io
             })
             .collect();
+        self.links = facets
+            .par_iter()
+            .with_min_len(crate::CHUNK)
+            .map(|f| [at[f.ends[0] as usize][0], at[f.ends[1] as usize][1]])
+            .collect();
+        self.find_faces(x_ref, &at);
     }
 
-    /// Fills [`Surface::faces`] from the reference positions `x_ref`: a
+    /// Fills [`Surface::faces`] from the reference positions `x_ref` and
+    /// each boundary node's facets ending and starting there (`at`): a
     /// boundary node with exactly two facets, one ending and one starting at
     /// it, whose outward normals differ by more than 30° (`n₁·n₂ <
     /// cos 30°`) is a corner. The test is on the reference configuration,
     /// so a node's kind changes only with the topology (its angle changes
     /// only with strain).
-    fn find_faces(&mut self, x_ref: &[Vec2]) {
+    fn find_faces(&mut self, x_ref: &[Vec2], at: &[[u32; 2]]) {
         let normal = |k: u32| self.facet_normal(x_ref, k);
         // parallel (rebuilt at every crack insertion); the indexed collect
         // keeps the order
@@ -208,14 +206,8 @@ impl Surface {
             .into_par_iter()
             .with_min_len(crate::CHUNK)
             .map(|b| {
-                let node = self.nodes[b];
-                let row = self.node_facets.row(b);
-                if row.len() != 2 {
-                    return [NONE; 2];
-                }
-                let (k0, k1) = (row[0], row[1]);
-                let [into, from] = if self.facets[k0 as usize].nodes[1] == node { [k0, k1] } else { [k1, k0] };
-                if self.facets[into as usize].nodes[1] != node || self.facets[from as usize].nodes[0] != node {
+                let [into, from] = at[b];
+                if self.node_facets.row(b).len() != 2 || into >= MANY || from >= MANY {
                     return [NONE; 2];
                 }
                 let (m, n) = (normal(into), normal(from));
