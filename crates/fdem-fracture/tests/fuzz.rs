@@ -6,7 +6,9 @@
 //! the same total area, and only copies of split nodes or nodes on split
 //! edges added.
 
-use fdem_fracture::{insertion::altitude, insertion::quality, plan, Edits, FractureParams, NewNode, NodeFailure};
+use fdem_fracture::{
+    insertion::altitude, insertion::quality, plan, plan_in_order, Edits, FractureParams, NewNode, NodeFailure,
+};
 use fdem_mesh::generate::triangulate;
 use fdem_mesh::node_elements;
 
@@ -164,8 +166,10 @@ fn thousands_of_random_insertions_keep_the_mesh_valid() {
             for i in (1..candidates.len()).rev() {
                 candidates.swap(i, (rng.next() % (i as u64 + 1)) as usize);
             }
-            let edits =
-                plan(&t, &active, &csr, &x, &candidates, &NodeFailure { normal: &normal, cracked: &cracked }, &params);
+            let failure = NodeFailure { normal: &normal, cracked: &cracked };
+            let edits = plan(&t, &active, &csr, &x, &candidates, &failure, &params);
+            // planned in parallel, the same edits as one candidate at a time
+            assert_eq!(edits, plan_in_order(&t, &active, &csr, &x, &candidates, &failure, &params), "round {round}");
             let n_before = x.len();
             apply(&mut x, &mut t, &edits);
             insertions += edits.inserted_at.len();
