@@ -9,7 +9,6 @@ use fdem_element::{ReferenceShape, Vec2};
 use fdem_fracture::{
     direction_angle, doubled_direction, nodal_failure, plan, Edits, FractureParams, NewNode, NodeFailure,
 };
-use rayon::iter::Either;
 use rayon::prelude::*;
 
 use crate::bonds::{BondGather, BondSeed};
@@ -70,6 +69,12 @@ pub(crate) struct FractureModel {
     /// parallel, then listed in node order).
     #[serde(skip)]
     candidate_flags: Vec<u8>,
+    /// Scratch: the bond list's other buffer. An insertion check builds the
+    /// new list in it and swaps the two, so that neither is allocated
+    /// afresh (page faults, serial) nor grown by a copy when the check's new
+    /// bonds are appended.
+    #[serde(skip)]
+    bonds_spare: Vec<Bond>,
     /// Scratch: each bond's response in the last step ([`Simulation::bond_forces`]).
     #[serde(skip)]
     pub(crate) bond_responses: Vec<fdem_contact::BondResponse>,
@@ -98,6 +103,7 @@ impl FractureModel {
             factor_seen: Vec::new(),
             candidates: Vec::new(),
             candidate_flags: Vec::new(),
+            bonds_spare: Vec::new(),
             bond_responses: Vec::new(),
             bond_gather: BondGather::default(),
         }
@@ -325,19 +331,26 @@ impl Simulation {
         // serial, at some 30 000 bonds and dozens of splits per check)
         let split = crate::topology::NodeBits::of(self.nodes.x.len(), family.iter().map(|(p, _)| *p));
         // old bonds at a split node go to the copies that share its crack
-        // faces with the partner, in proportion to those faces; in
-        // parallel, the list kept in bond order (a serial copy of some
-        // 30 000 bonds at every insertion check was 0.25% of a fragmenting
-        // impact's run)
-        let old = std::mem::take(&mut fr.bonds);
-        fr.bonds = old
+        // faces with the partner, in proportion to those faces, in place of
+        // the old bond (bond order kept). Few bonds are at a split node: they
+        // are found in parallel, and when each goes to one copy (the usual
+        // case) it is replaced where it stands; otherwise the list is copied
+        // round them into the spare buffer. (Copying all the bonds one by
+        // one at every insertion check, some 30 000 of them, was 0.25% of a
+        // fragmenting impact's run, serial.)
+        let at_split: Vec<u32> = fr
+            .bonds
             .par_iter()
+            .enumerate()
             .with_min_len(crate::CHUNK)
-            .flat_map_iter(|&bond| {
+            .filter(|(_, bond)| bond.nodes.iter().any(|&v| split.has(v)))
+            .map(|(k, _)| k as u32)
+            .collect();
+        let carried: Vec<Vec<Bond>> = at_split
+            .iter()
+            .map(|&k| {
+                let bond = fr.bonds[k as usize];
                 let [a, b] = bond.nodes;
-                if !split.has(a) && !split.has(b) {
-                    return Either::Left(std::iter::once(bond));
-                }
                 let mut shared = Vec::new();
                 for &u in &members(a) {
                     for &v in &members(b) {
@@ -347,9 +360,27 @@ impl Simulation {
                         }
                     }
                 }
-                Either::Right(shared.into_iter())
+                shared
             })
             .collect();
+        if carried.iter().all(|c| c.len() == 1) {
+            for (&k, c) in at_split.iter().zip(&carried) {
+                fr.bonds[k as usize] = c[0];
+            }
+        } else {
+            let mut bonds = std::mem::take(&mut fr.bonds_spare);
+            bonds.clear();
+            // room for this check's new bonds too (a few per split)
+            bonds.reserve(fr.bonds.len() + fr.bonds.len() / 4 + 64 * family.len());
+            let mut from = 0;
+            for (&k, c) in at_split.iter().zip(&carried) {
+                bonds.extend_from_slice(&fr.bonds[from..k as usize]);
+                bonds.extend_from_slice(c);
+                from = k as usize + 1;
+            }
+            bonds.extend_from_slice(&fr.bonds[from..]);
+            fr.bonds_spare = std::mem::replace(&mut fr.bonds, bonds);
+        }
         // new cracks that still owe fracture energy get bonds between the
         // pieces of the split node that face each other across them
         let mut preload = Vec::new();
