@@ -97,7 +97,10 @@ class Simulation:
         or takes stays in creation order (the model's nodes and elements,
         then those crack insertion made, in the order it made them). Results
         differ from a run without it only in the order of floating-point
-        sums. ``None`` (default): never.
+        sums. Default 0.05: it makes a fragmenting run faster (the 10⁴
+        element impact of ``benchmarks/fracture_impact.py`` 2.6 against
+        2.0×10⁶ element-updates/s on one thread) and costs an intact one a
+        sort every 1000 steps. ``None``: never.
 
     Raises
     ------
@@ -118,7 +121,7 @@ class Simulation:
         dt_interval: int = 100,
         energy_growth: float = 0.05,
         mass_scaling: float | None = None,
-        renumber: float | None = None,
+        renumber: float | None = 0.05,
         local_damping: float = 0.0,
     ) -> None:
         if not isinstance(model, Model):
