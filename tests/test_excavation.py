@@ -188,18 +188,18 @@ def without_lineage(path, out, parents: np.ndarray, bonds: int, materials: int) 
     bonds and each one's mixed-mode law (a tag and six f64), the count of
     the ``materials`` and one f64 each; the count of the materials and
     each one's softening curve, one byte for linear softening, and the
-    count of the bonds and each one's kink, one byte for none), resealed,
-    at ``out``."""
+    count of the bonds and each one's kink, one byte for none; the
+    renumbering interval, one byte for none), resealed, at ``out``."""
     import struct
     import zlib
 
     b = Path(path).read_bytes()
-    assert b[:8] == b"FDEMCKPT" and struct.unpack_from("<I", b, 8)[0] == 10
+    assert b[:8] == b"FDEMCKPT" and struct.unpack_from("<I", b, 8)[0] == 11
     s_len, u_len = struct.unpack_from("<QQ", b, 16)
     varint = lambda n: max(1, -(-int(n).bit_length() // 7))  # noqa: E731
     block = varint(len(parents)) + sum(varint(p) for p in parents) + varint(bonds) + 16 * bonds + 8 + 2
     block += varint(bonds) + 49 * bonds + varint(materials) + 8 * materials
-    block += varint(materials) + materials + varint(bonds) + bonds
+    block += varint(materials) + materials + varint(bonds) + bonds + 1
     state, user = b[40 : 40 + s_len - block], b[40 + s_len :]
     head = bytearray(b[:40])
     struct.pack_into("<I", head, 8, 6)

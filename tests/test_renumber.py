@@ -187,16 +187,17 @@ def test_renumbering_keeps_the_forces_of_intact_cohesive_bonds():
 
 def test_motion_renumbers_every_thousand_steps_without_growth():
     """Besides the renumberings that growth triggers, a run with
-    renumbering on renumbers at every 1000th step (falling rock spoils the
-    order as surely as new elements: docs/renumbering.md), the same on any
-    thread count, and steps on with the physics of a run that does not
-    renumber: positions to 1e-12 m after 2 500 steps of a plate under
-    gravity and edge pressure (no contact, no fracture, no growth)."""
+    ``renumber_every=1000`` renumbers at every 1000th step (falling rock
+    spoils the order as surely as new elements: docs/renumbering.md), the
+    same on any thread count, and steps on with the physics of a run that
+    does not renumber: positions to 1e-12 m after 2 500 steps of a plate
+    under gravity and edge pressure (no contact, no fracture, no growth).
+    With the defaults (growth only) the plate is never renumbered."""
     mesh = fdem.Mesh.rectangle(10.0, 4.0, 20, 8)
     model = fdem.Model(mesh, material=fdem.Elastic(E=10e9, nu=0.25, rho=2500.0)).set_gravity(0.0, -9.81)
     model.fix("left").pressure("top", 1e6)
     plain = fdem.Simulation(model, threads=2, renumber=None)
-    runs = [fdem.Simulation(model, threads=t) for t in (1, 2)]  # the default: 0.05
+    runs = [fdem.Simulation(model, threads=t, renumber_every=1000) for t in (1, 2)]
     plain.step(999)
     for sim in runs:
         sim.step(999)
@@ -206,6 +207,9 @@ def test_motion_renumbers_every_thousand_steps_without_growth():
         sim.step(1500)
         assert sim.renumberings == 2
     plain.step(1501)
+    default = fdem.Simulation(model, threads=2)
+    default.step(2500)
+    assert default.renumberings == 0 and np.array_equal(default.positions(), plain.positions())
     one, two = runs
     assert np.array_equal(one.positions(), two.positions())
     assert np.max(np.abs(one.positions() - plain.positions())) <= 1e-12

@@ -436,10 +436,12 @@ def fragmenting_memory_growth(tmp_path: Path, elements: float, warm_up: float, u
 
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs /proc")
 def test_resident_memory_of_a_fragmenting_run_grows_under_5_percent_after_warm_up(tmp_path):
-    """About 9 000 steps and 20 frames and checkpoints after the warm-up
-    (1 000 elements at the start): the peak resident memory of the second
-    half of them within 5% of the first half's."""
-    first, second = fragmenting_memory_growth(tmp_path, 1000, 1e-3, 3e-3)
+    """About 10 000 steps and 25 frames and checkpoints after a warm-up of
+    0.5 ms (1 000 elements at the start; the block still cracks until about
+    0.75 ms, 2 450 cracks at 0.5 ms and 3 540 by 0.75 ms with the default
+    renumbering): the peak resident memory of the second half of them
+    within 5% of the first half's."""
+    first, second = fragmenting_memory_growth(tmp_path, 1000, 5e-4, 3e-3)
     assert second < 1.05 * first, (first, second)
 
 

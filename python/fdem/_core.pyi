@@ -83,6 +83,7 @@ class Simulation:
         energy_growth: float = 0.05,
         mass_scaling: float | None = None,
         renumber: float | None = None,
+        renumber_every: int | None = None,
         threads: int = 0,
         local_damping: float = 0.0,
     ) -> Simulation: ...
@@ -106,6 +107,7 @@ class Simulation:
         energy_growth: float = 0.05,
         mass_scaling: float | None = None,
         renumber: float | None = None,
+        renumber_every: int | None = None,
         local_damping: float = 0.0,
     ) -> None: ...
     def set_prescribed_velocity(self, nodes: NDArray[np.int64], values: NDArray[np.float64]) -> None: ...

@@ -427,7 +427,17 @@ def _started(
     """A fresh run: the simulation after its equilibrium stage, with mass
     scaling set, and its bookkeeping (kept in the checkpoints)."""
     n0 = model.mesh.n_elements
-    sim = Simulation(model, threads=threads, stiffness_damping=2e-6, renumber=case.renumber, safety=case.safety)
+    # with renumbering on, also every 1000th step: falling rock spoils the
+    # order as surely as cracks do (docs/renumbering.md)
+    every = None if case.renumber is None else 1000
+    sim = Simulation(
+        model,
+        threads=threads,
+        stiffness_damping=2e-6,
+        renumber=case.renumber,
+        renumber_every=every,
+        safety=case.safety,
+    )
     built = _time.perf_counter() - wall0
     if progress:
         print(f"{n0} elements, {model.mesh.n_nodes} nodes, built in {built:.1f} s; equilibrating…", flush=True)

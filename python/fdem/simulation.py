@@ -91,16 +91,19 @@ class Simulation:
         crack insertion has grown the element count by this fraction (e.g.
         0.05) since the last renumbering, the kernel puts its nodes and
         elements back in the order of a Hilbert curve through their current
-        positions; with it set, the kernel also renumbers at every 1000th
-        step, since falling, mixing rock spoils the order too. Ids do not
-        change: every array and id this class reports
+        positions. Ids do not change: every array and id this class reports
         or takes stays in creation order (the model's nodes and elements,
         then those crack insertion made, in the order it made them). Results
         differ from a run without it only in the order of floating-point
         sums. Default 0.05: it makes a fragmenting run faster (the 10⁴
         element impact of ``benchmarks/fracture_impact.py`` 2.6 against
-        2.0×10⁶ element-updates/s on one thread) and costs an intact one a
-        sort every 1000 steps. ``None``: never.
+        2.0×10⁶ element-updates/s on one thread), and a run that hardly
+        cracks is never renumbered. ``None``: never.
+    renumber_every : int, optional
+        With ``renumber`` set, also renumber at every multiple of this many
+        steps, whatever the growth: falling, mixing rock spoils the order
+        too (the block-caving case uses 1000). ``None`` (default): on
+        growth only.
 
     Raises
     ------
@@ -122,6 +125,7 @@ class Simulation:
         energy_growth: float = 0.05,
         mass_scaling: float | None = None,
         renumber: float | None = 0.05,
+        renumber_every: int | None = None,
         local_damping: float = 0.0,
     ) -> None:
         if not isinstance(model, Model):
@@ -139,6 +143,7 @@ class Simulation:
             mass_scaling,
             renumber,
             local_damping,
+            renumber_every,
         )
         arrays = model.kernel_arrays()
         self._fingerprint = _fingerprint(arrays)
@@ -184,6 +189,7 @@ class Simulation:
         scaling: Any,
         renumber: Any,
         local: Any = 0.0,
+        every: Any = None,
     ) -> dict[str, Any]:
         s = number("safety", safety)
         if not 0 < s <= 1:
@@ -201,13 +207,14 @@ class Simulation:
             "energy_growth": positive("energy_growth", growth, allow_zero=True),
             "mass_scaling": None if scaling is None else positive("mass_scaling", scaling),
             "renumber": None if renumber is None else positive("renumber", renumber),
+            "renumber_every": None if every is None else whole("renumber_every", every),
         }
 
     def configure(self, **changes: Any) -> Simulation:
         """Changes run settings between stages (``safety``, ``dt``,
         ``mass_damping``, ``stiffness_damping``, ``local_damping``, ``dt_interval``,
         ``energy_growth``, ``mass_scaling``, ``renumber``,
-        ``check_every``). Turning mass scaling on, or raising its step,
+        ``renumber_every``, ``check_every``). Turning mass scaling on, or raising its step,
         scales masses at once; turning it off keeps the
         masses added so far. ``check_every`` is the number of steps between
         fracture checks (:meth:`Model.fracture`; the model must have
@@ -222,6 +229,7 @@ class Simulation:
             "energy_growth",
             "mass_scaling",
             "renumber",
+            "renumber_every",
             "check_every",
         }
         unknown = set(changes) - known
@@ -247,6 +255,7 @@ class Simulation:
                 cur["mass_scaling"],
                 cur["renumber"],
                 cur.get("local_damping", 0.0),
+                cur.get("renumber_every"),
             )
         # everything checked before anything changes
         if steps is not None:
@@ -792,8 +801,16 @@ class Simulation:
         self = cls.__new__(cls)
         self.model = model
         # older checkpoints' run descriptions predate mass scaling and
-        # renumbering
-        self._settings = {"mass_scaling": None, "renumber": None, "local_damping": 0.0, **settings}
+        # renumbering; before the renumbering interval was a setting, a run
+        # that renumbered did so every 1000 steps too
+        every = 1000 if settings.get("renumber") is not None else None
+        self._settings = {
+            "mass_scaling": None,
+            "renumber": None,
+            "local_damping": 0.0,
+            "renumber_every": every,
+            **settings,
+        }
         self._fingerprint = mine
         self._core = core
         self._series = {}

@@ -55,7 +55,7 @@ impl PySimulation {
         contact_laws=None, contact_facets=None, contact_facet_laws=None, crack_law=0, contact_margin=None,
         fracture_interval=0, fracture_edge_tolerance=15.0, fracture_crack_tolerance=30.0, fracture_min_quality=0.2, fracture_min_altitude=0.0, fracture_insert_at=0.02,
         stage_times=Vec::new(), stage_elements=Vec::new(), stage_ramps=Vec::new(),
-        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.05, mass_scaling=None, renumber=None, threads=0, local_damping=0.0
+        mass_damping=0.0, stiffness_damping=0.0, safety=0.8, fixed_dt=None, dt_interval=100, energy_growth=0.05, mass_scaling=None, renumber=None, renumber_every=None, threads=0, local_damping=0.0
     ))]
     fn new(
         points: PyReadonlyArray2<'_, f64>,
@@ -96,6 +96,7 @@ impl PySimulation {
         energy_growth: f64,
         mass_scaling: Option<f64>,
         renumber: Option<f64>,
+        renumber_every: Option<u64>,
         threads: usize,
         local_damping: f64,
     ) -> PyResult<Self> {
@@ -246,6 +247,7 @@ impl PySimulation {
                     energy_growth,
                     mass_scaling,
                     renumber,
+                    renumber_every,
                     local_damping,
                 },
             };
@@ -353,7 +355,7 @@ impl PySimulation {
     }
 
     /// Replaces the run settings between stages.
-    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth=0.05, mass_scaling=None, renumber=None, local_damping=0.0))]
+    #[pyo3(signature = (*, mass_damping, stiffness_damping, safety, fixed_dt, dt_interval, energy_growth=0.05, mass_scaling=None, renumber=None, renumber_every=None, local_damping=0.0))]
     #[allow(clippy::too_many_arguments)]
     fn set_settings(
         &mut self,
@@ -365,6 +367,7 @@ impl PySimulation {
         energy_growth: f64,
         mass_scaling: Option<f64>,
         renumber: Option<f64>,
+        renumber_every: Option<u64>,
         local_damping: f64,
     ) -> PyResult<()> {
         guard(|| {
@@ -378,6 +381,7 @@ impl PySimulation {
                 energy_growth,
                 mass_scaling,
                 renumber,
+                renumber_every,
                 local_damping,
             };
             self.sim.set_settings(s).map_err(|e| value_error(e.to_string()))

@@ -65,8 +65,8 @@ pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
 /// [`Format8`] (the bonds' offsets and the local damping), format 9 then
 /// [`Format9`] (the bonds' mixed-mode laws and the materials' `G_II`),
 /// format 10 then [`Format10`] (the materials' softening curves and the
-/// bonds' kinks).
-pub const FORMAT_VERSION: u32 = 10;
+/// bonds' kinks), format 11 then [`Format11`] (the renumbering interval).
+pub const FORMAT_VERSION: u32 = 11;
 const HEADER: usize = 40;
 
 /// Why a checkpoint could not be written or read.
@@ -261,6 +261,7 @@ impl Simulation {
         state.extend(postcard::to_stdvec(&Format8::of(self)).expect("format-8 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format9::of(self)).expect("format-9 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format10::of(self)).expect("format-10 data is serialisable"));
+        state.extend(postcard::to_stdvec(&Format11::of(self)).expect("format-11 data is serialisable"));
         let mut out = Vec::with_capacity(HEADER + state.len() + user.len());
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -362,6 +363,12 @@ impl Simulation {
             (Some(o), rest)
         } else {
             (None, rest)
+        };
+        // an older file renumbered periodically whenever it renumbered
+        let (interval, rest) = if version >= 11 {
+            postcard::take_from_bytes::<Format11>(rest).map_err(decode)?
+        } else {
+            (Format11 { renumber_every: renumbering.renumber.map(|_| crate::RENUMBER_INTERVAL) }, rest)
         };
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
@@ -482,6 +489,10 @@ impl Simulation {
             }
         }
         owned.settings.renumber = renumbering.renumber;
+        if interval.renumber_every == Some(0) {
+            return Err(CheckpointError::Invalid("renumbering interval 0 steps".into()));
+        }
+        owned.settings.renumber_every = interval.renumber_every;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()

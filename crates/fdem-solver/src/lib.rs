@@ -41,10 +41,11 @@ mod topology;
 /// ([`Settings::energy_growth`]).
 pub const ENERGY_CHECK_INTERVAL: u64 = 50;
 
-/// Steps between the spatial renumberings that motion calls for, when
-/// renumbering is on ([`Settings::renumber`]): besides the ones crack
-/// insertion's growth triggers, the kernel renumbers at every multiple of
-/// this step count. Falling and mixing rock spoils the order as surely as
+/// Steps between the spatial renumberings that motion calls for, as the
+/// block-caving case sets [`Settings::renumber_every`] (and as every run
+/// with [`Settings::renumber`] did before checkpoint format 11): besides
+/// the ones crack insertion's growth triggers, the kernel renumbers at
+/// every multiple of this step count. Falling and mixing rock spoils the order as surely as
 /// new elements do: at 3.5 s of the paper-scale caving run, where few
 /// cracks open, a renumbering (60 ms on 2 threads, about four steps) made
 /// the step 16% faster, and the gain wore off over about 2 500 steps

@@ -114,14 +114,21 @@ pub struct Settings {
     pub mass_scaling: Option<f64>,
     /// Spatial renumbering (docs/renumbering.md): once crack insertion has
     /// grown the element count by this fraction since the last renumbering
-    /// (or the start), and at every multiple of
-    /// [`RENUMBER_INTERVAL`](crate::RENUMBER_INTERVAL) steps, nodes and
-    /// elements are put back in the order of a Hilbert curve through their
-    /// positions, for memory locality. Ids,
-    /// and so everything read out, stay in creation order. `None`: never.
+    /// (or the start), and at every multiple of `renumber_every` steps,
+    /// nodes and elements are put back in the order of a Hilbert curve
+    /// through their positions, for memory locality. Ids, and so
+    /// everything read out, stay in creation order. `None`: never.
     // written in format 4 of checkpoints (checkpoint.rs)
     #[serde(skip)]
     pub renumber: Option<f64>,
+    /// With `renumber` set, also renumber at every multiple of this many
+    /// steps, whatever the growth: falling, mixing rock spoils the order
+    /// too (the caving case: [`RENUMBER_INTERVAL`](crate::RENUMBER_INTERVAL)).
+    /// `None`: on growth only, so that a run that hardly cracks (a
+    /// laboratory test) is never renumbered.
+    // written in format 11 of checkpoints (checkpoint.rs)
+    #[serde(skip)]
+    pub renumber_every: Option<u64>,
     /// Local (non-viscous) damping coefficient `α_L`, `0 ≤ α_L < 1`, as in
     /// FLAC and UDEC (Cundall 1987): each free velocity component of a
     /// node feels `−α_L |f| sign(v)` on top of its net force `f` (`v` its
@@ -147,6 +154,7 @@ impl Default for Settings {
             energy_growth: 0.05,
             mass_scaling: None,
             renumber: None,
+            renumber_every: None,
             local_damping: 0.0,
         }
     }

@@ -223,13 +223,13 @@ impl Simulation {
     /// is set, once crack insertion has grown the element count by that
     /// fraction since the last renumbering (checked after a topology change:
     /// `changed`), and at every multiple of
-    /// [`RENUMBER_INTERVAL`](crate::RENUMBER_INTERVAL) steps, its time
-    /// counted as topology's. The tests read saved state only, so a
+    /// [`Settings::renumber_every`](crate::Settings::renumber_every) steps
+    /// if that is set, its time counted as topology's. The tests read saved state only, so a
     /// restored run renumbers at the same steps.
     pub(crate) fn renumber_if_due(&mut self, changed: bool) {
         let Some(f) = self.settings.renumber else { return };
         let grown = changed && (self.elems.conn.len() as f64) >= (1.0 + f) * self.layout.base as f64;
-        if !grown && !self.clock.every(crate::RENUMBER_INTERVAL) {
+        if !grown && !self.settings.renumber_every.is_some_and(|k| self.clock.every(k)) {
             return;
         }
         let clock = std::time::Instant::now();

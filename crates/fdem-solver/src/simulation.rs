@@ -503,6 +503,11 @@ impl Simulation {
         self.staging.elastic_stage
     }
 
+    /// The run settings in force.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
     /// Replaces the run settings (damping, safety, fixed step) between stages.
     pub fn set_settings(&mut self, settings: Settings) -> Result<(), SetupError> {
         check_settings(&settings)?;
@@ -550,6 +555,9 @@ pub(crate) fn check_settings(s: &Settings) -> Result<(), SetupError> {
         if !(f > 0.0 && f.is_finite()) {
             return invalid(format!("renumber = {f} must be positive (a fraction of the element count)"));
         }
+    }
+    if s.renumber_every == Some(0) {
+        return invalid("renumber_every = 0 steps must be positive".into());
     }
     if let Some(dt) = s.mass_scaling {
         if !(dt > 0.0 && dt.is_finite()) {

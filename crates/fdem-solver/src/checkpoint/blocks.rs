@@ -204,3 +204,19 @@ impl Format10 {
         }
     }
 }
+
+/// What format 11 added: the steps between periodic renumberings
+/// ([`Settings::renumber_every`](crate::Settings::renumber_every)). An
+/// older file renumbered every
+/// [`RENUMBER_INTERVAL`](crate::RENUMBER_INTERVAL) steps whenever its
+/// renumbering was on, and restores that.
+#[derive(Serialize, Deserialize)]
+pub(super) struct Format11 {
+    pub(super) renumber_every: Option<u64>,
+}
+
+impl Format11 {
+    pub(super) fn of(s: &Simulation) -> Self {
+        Format11 { renumber_every: s.settings.renumber_every }
+    }
+}
