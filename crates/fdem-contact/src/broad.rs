@@ -15,6 +15,8 @@
 //! candidate lists of the unchanged nodes and facets instead of querying
 //! every boundary node again.
 //!
+//! Over 800 lines with its unit tests; the code itself is about 620.
+//!
 //! [`SurfaceFacet::key`]: crate::SurfaceFacet::key
 
 use parry2d_f64::bounding_volume::Aabb;

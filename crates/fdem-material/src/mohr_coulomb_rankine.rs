@@ -35,6 +35,11 @@
 //! opens when the shear return alone cannot satisfy the cut-off); then the
 //! linear softening branch before the exhausted one. The tests check this
 //! rule against a brute-force enumeration of all 63 plane combinations.
+//!
+//! Over 800 lines without tests: the return mapping is one algorithm (the
+//! trial, the active sets in order, their closed-form solutions, the
+//! consistency test and the softening branches), each part written against
+//! the invariants of the others; its tests are in `tests/return_mapping.rs`.
 
 pub use crate::crack_band::{CrackBand, Geometry};
 use crate::dense::{solve, MAX};
