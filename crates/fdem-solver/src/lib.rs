@@ -35,6 +35,7 @@ mod renumber;
 mod setup;
 mod simulation;
 mod stable_step;
+mod sums;
 mod topology;
 
 /// Steps between checks of the energy-growth watchdog

@@ -4,6 +4,7 @@
 //! (`renumber.rs`).
 
 use std::borrow::Cow;
+use std::ops::Range;
 
 use fdem_element::kinematics::{deformation_gradient, polar_rotation, signed_area};
 use fdem_element::tensor::rotate;
@@ -13,7 +14,8 @@ use fdem_material::PlasticState;
 use crate::energy::Energies;
 use crate::passes::NO_BC;
 use crate::simulation::{ContactInfo, ContactStats, PhaseTimes, Simulation};
-use crate::{CHUNK, NONE};
+use crate::sums::chunk_tree_sum;
+use crate::NONE;
 
 impl Simulation {
     /// Current simulated time (s).
@@ -146,12 +148,14 @@ impl Simulation {
     /// accumulated work pairs forces with the centred displacements). Large
     /// only for modes near the stability limit.
     pub(crate) fn kinetic_lag(&self) -> f64 {
-        (0..self.n_nodes())
-            .map(|i| {
+        let leaf = |r: Range<usize>| {
+            r.map(|i| {
                 let (w, h) = (self.whole_step_velocity(i), self.nodes.v[i]);
                 0.5 * self.nodes.mass[i] * ((w[0] - h[0]) * (w[0] - h[0]) + (w[1] - h[1]) * (w[1] - h[1]))
             })
-            .sum()
+            .fold(0.0, |a, b| a + b)
+        };
+        self.pool.install(|| chunk_tree_sum(self.n_nodes(), 0.0, &leaf, &|a, b| a + b))
     }
 
     /// The whole-step velocity of node `i` (see [`Self::velocities`]),
@@ -414,33 +418,34 @@ impl Simulation {
     }
 
     /// Kinetic energy at the current whole step (J per unit thickness),
-    /// summed per chunk of nodes, then over chunks.
+    /// summed per chunk of nodes, then over chunks ([`chunk_tree_sum`]: the
+    /// same bits on any thread count).
     pub fn kinetic_energy(&self) -> f64 {
-        let n = self.n_nodes();
-        (0..n.div_ceil(CHUNK))
-            .map(|c| {
-                (c * CHUNK..n.min((c + 1) * CHUNK))
-                    .map(|i| {
-                        let v = self.whole_step_velocity(i);
-                        0.5 * self.nodes.mass[i] * (v[0] * v[0] + v[1] * v[1])
-                    })
-                    .sum::<f64>()
+        let leaf = |r: Range<usize>| {
+            r.map(|i| {
+                let v = self.whole_step_velocity(i);
+                0.5 * self.nodes.mass[i] * (v[0] * v[0] + v[1] * v[1])
             })
-            .sum()
+            .fold(0.0, |a, b| a + b)
+        };
+        self.pool.install(|| chunk_tree_sum(self.n_nodes(), 0.0, &leaf, &|a, b| a + b))
     }
 
-    /// Elastic strain energy `Σ A ½ σ̂ : C⁻¹ : σ̂` (J per unit thickness).
+    /// Elastic strain energy `Σ A ½ σ̂ : C⁻¹ : σ̂` (J per unit thickness),
+    /// summed per chunk of elements, then over chunks ([`chunk_tree_sum`]).
     pub fn elastic_energy(&self) -> f64 {
         let x = &self.nodes.x;
-        (0..self.n_elements())
-            .filter(|&e| self.elems.active[e])
-            .map(|e| {
-                let t = self.elems.conn[e];
-                let area = signed_area(&[x[t[0] as usize], x[t[1] as usize], x[t[2] as usize]]);
-                let mat = &self.materials[self.elems.material[e] as usize];
-                area * mat.elastic.energy_density(self.elems.stress[e])
-            })
-            .sum()
+        let leaf = |r: Range<usize>| {
+            r.filter(|&e| self.elems.active[e])
+                .map(|e| {
+                    let t = self.elems.conn[e];
+                    let area = signed_area(&[x[t[0] as usize], x[t[1] as usize], x[t[2] as usize]]);
+                    let mat = &self.materials[self.elems.material[e] as usize];
+                    area * mat.elastic.energy_density(self.elems.stress[e])
+                })
+                .fold(0.0, |a, b| a + b)
+        };
+        self.pool.install(|| chunk_tree_sum(self.n_elements(), 0.0, &leaf, &|a, b| a + b))
     }
 
     /// Node `i`'s share of the energy account at the current whole step:
@@ -534,22 +539,22 @@ impl Simulation {
     /// half of the last displacement is still pending and is added here, so
     /// that the account matches the whole-step kinetic energy.
     pub fn energies(&self) -> Energies {
-        let mut sum = [0.0; 6];
-        let n = self.n_nodes();
-        // nodes by chunks, so the kinetic energy is summed as in
-        // `kinetic_energy`, in one pass and without allocating (the energy
-        // watchdog calls this inside the time loop)
-        for chunk in 0..n.div_ceil(CHUNK) {
-            let mut kinetic_chunk = 0.0;
-            for i in chunk * CHUNK..n.min((chunk + 1) * CHUNK) {
+        // nodes by chunks along the same tree as `kinetic_energy` (so the
+        // kinetic energy is its, to the bit), in one pass, in parallel and
+        // without allocating (the energy watchdog calls this inside the
+        // time loop)
+        let leaf = |r: Range<usize>| {
+            let mut sum = [0.0; 6];
+            for i in r {
                 let t = self.node_energy_terms(i);
-                kinetic_chunk += t[0];
-                for k in 1..6 {
+                for k in 0..6 {
                     sum[k] += t[k];
                 }
             }
-            sum[0] += kinetic_chunk;
-        }
+            sum
+        };
+        let add = |a: [f64; 6], b: [f64; 6]| std::array::from_fn(|k| a[k] + b[k]);
+        let sum = self.pool.install(|| chunk_tree_sum(self.n_nodes(), [0.0; 6], &leaf, &add));
         let [kinetic, external, support, damping, contact, contact_damping] = sum;
         let acc = &self.ledger.account;
         Energies {
