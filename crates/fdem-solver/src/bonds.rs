@@ -78,21 +78,54 @@ impl BondGather {
         self.build(bonds, index_of, chunks);
     }
 
-    /// Builds the lists afresh (in one pass over the bonds, in bond
-    /// order), for `chunks` chunks of boundary nodes.
+    /// Builds the lists afresh for `chunks` chunks of boundary nodes, in
+    /// parallel: each fixed part of [`CHUNK`](crate::CHUNK) bonds groups
+    /// its ends by chunk of boundary nodes (a counting sort, in bond order
+    /// within each group), then each chunk's list joins its groups from
+    /// the parts in part order. The lists are those of one pass over the
+    /// bonds in bond order (built serially, this pass was 0.27% of the 10⁴
+    /// fragmenting impact at one thread, at every insertion check).
+    /// Allocates the parts' groups: it runs after topology changes only.
     fn build(&mut self, bonds: &[Bond], index_of: &[u32], chunks: usize) {
+        use crate::CHUNK;
+        // per part: where each chunk's group starts (`chunks + 1` offsets)
+        // and the groups one after the other
+        let parts: Vec<(Vec<u32>, Vec<[u32; 2]>)> = bonds
+            .par_chunks(CHUNK)
+            .enumerate()
+            .map(|(q, part)| {
+                let ends = |bond: &Bond| {
+                    let [ia, ib] = bond.nodes.map(|v| index_of[v as usize]);
+                    (ia != crate::NONE && ib != crate::NONE).then_some([ia, ib])
+                };
+                let mut start = vec![0u32; chunks + 1];
+                for i in part.iter().filter_map(ends).flatten() {
+                    start[i as usize / CHUNK + 1] += 1;
+                }
+                for c in 0..chunks {
+                    start[c + 1] += start[c];
+                }
+                let mut at = start.clone();
+                let mut grouped = vec![[0u32; 2]; start[chunks] as usize];
+                for (i, bond) in part.iter().enumerate() {
+                    let Some(nodes) = ends(bond) else { continue };
+                    let k = q * CHUNK + i;
+                    for (s, b) in nodes.into_iter().enumerate() {
+                        let c = b as usize / CHUNK;
+                        grouped[at[c] as usize] = [(b as usize % CHUNK) as u32, 2 * k as u32 + s as u32];
+                        at[c] += 1;
+                    }
+                }
+                (start, grouped)
+            })
+            .collect();
         self.chunks.resize_with(chunks, Vec::new);
-        self.chunks.iter_mut().for_each(Vec::clear);
-        for (k, bond) in bonds.iter().enumerate() {
-            let [ia, ib] = bond.nodes.map(|v| index_of[v as usize]);
-            if ia == crate::NONE || ib == crate::NONE {
-                continue;
+        self.chunks.par_iter_mut().enumerate().for_each(|(c, list)| {
+            list.clear();
+            for (start, grouped) in &parts {
+                list.extend_from_slice(&grouped[start[c] as usize..start[c + 1] as usize]);
             }
-            for (s, i) in [ia, ib].into_iter().enumerate() {
-                let (c, j) = (i as usize / crate::CHUNK, i as usize % crate::CHUNK);
-                self.chunks[c].push([j as u32, 2 * k as u32 + s as u32]);
-            }
-        }
+        });
         // room for [`Self::drop_broken`]'s numbering: breaks allocate nothing
         self.remap.clear();
         self.remap.reserve(bonds.len());
@@ -620,6 +653,16 @@ mod tests {
             force
         };
         let want = serial(&bonds, &responses);
+        // the lists of one pass over the bonds in bond order
+        let mut lists = vec![Vec::new(); nb.div_ceil(CHUNK)];
+        for (k, bond) in bonds.iter().enumerate() {
+            let [ia, ib] = bond.nodes.map(|v| index_of[v as usize]);
+            if ia != NONE && ib != NONE {
+                for (s, i) in [ia, ib].into_iter().enumerate() {
+                    lists[i as usize / CHUNK].push([(i as usize % CHUNK) as u32, 2 * k as u32 + s as u32]);
+                }
+            }
+        }
         for threads in [1, 2, 3] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             let mut gather = BondGather::default();
@@ -628,6 +671,7 @@ mod tests {
                 gather.ensure(&bonds, &index_of, nb);
                 gather.add(&mut force, |k| responses[k].force);
             });
+            assert!(gather.chunks == lists, "{threads} threads: the lists");
             assert!(force == want, "{threads} threads");
             assert!(gather.chunks.iter().all(|list| !list.is_empty()), "every chunk has bonds");
         }
