@@ -265,9 +265,12 @@ impl Simulation {
             for &p in &candidates {
                 fr.node_angle[p as usize] = direction_angle(fr.node_direction[p as usize]);
             }
-            // ties by id: the order does not depend on the layout
+            // ties by id: the order does not depend on the layout. A total
+            // order (ids are distinct), so any sort gives the same list: a
+            // parallel one (serial, this sort was 0.35% of the 10⁴
+            // fragmenting impact at one thread; it allocates nothing)
             let id = |p: u32| self.layout.node_id(p);
-            candidates.sort_by(|&a, &b| {
+            candidates.par_sort_unstable_by(|&a, &b| {
                 fr.node_factor[b as usize].total_cmp(&fr.node_factor[a as usize]).then(id(a).cmp(&id(b)))
             });
             edits = plan(
