@@ -134,16 +134,9 @@ impl Surface {
                 }
             }
         });
-        let mut nodes = vec![0u32; total as usize];
-        {
-            let slots: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
-            index_of.par_iter().enumerate().with_min_len(CHUNK).for_each(|(v, &b)| {
-                if b != NONE {
-                    slots[b as usize].store(v as u32, Relaxed);
-                }
-            });
-            nodes.par_iter_mut().zip(slots).for_each(|(n, s)| *n = s.into_inner());
-        }
+        // (a parallel filter collects in order)
+        let nodes: Vec<u32> = (0..n_nodes as u32).into_par_iter().filter(|&v| degree[v as usize] > 0).collect();
+        debug_assert_eq!(nodes.len(), total as usize);
         // rows: offsets by a prefix sum of the boundary nodes' degrees over
         // fixed chunks, items placed through atomic cursors (any order),
         // then each row sorted (facet order)
@@ -346,18 +339,9 @@ mod tests {
     fn the_parallel_indexing_is_the_serial_passes() {
         let squares = 900;
         let n = 5 * squares;
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
-        // a scrambled permutation of the node ids; every fifth unused
-        let mut ids: Vec<u32> = (0..n as u32).collect();
-        for i in (1..n).rev() {
-            ids.swap(i, (next() % (i as u64 + 1)) as usize);
-        }
+        // a scrambled permutation of the node ids (7 919 is prime and does
+        // not divide n); every fifth unused
+        let ids: Vec<u32> = (0..n).map(|i| ((i * 7919) % n) as u32).collect();
         let mut x = vec![[0.0; 2]; n];
         let (mut facets, mut apex) = (Vec::new(), Vec::new());
         for q in 0..squares {
