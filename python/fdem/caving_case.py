@@ -309,7 +309,13 @@ class CavingCase:
     default, the paper's "the material is allowed to fall freely") has
     none. With the floor at the base (0) the paper-scale abutments carry
     what the paper's Table 2 gives there much more nearly (docs/caving.md,
-    "What differs, and why"). The case round-trips through JSON
+    "What differs, and why"). ``ramp`` (s) releases each undercut stage
+    gradually (:meth:`Model.excavate`): the removed elements' forces on
+    the rock that stays fall linearly to zero over it. 0, the paper's
+    staging and the default, removes them at once; the release of the
+    abutment stress then launches loose pieces of the new cave back at
+    several m/s beyond what their fall gives (docs/caving.md, "Fragments
+    faster than free fall"). The case round-trips through JSON
     (:meth:`to_json`, :meth:`from_json`, :meth:`save`, :meth:`load`),
     which names the field of any bad value."""
 
@@ -341,6 +347,7 @@ class CavingCase:
     top_pressure: float = TOP_PRESSURE
     regions: tuple[UndercutStage, ...] | None = None
     floor: float | None = None
+    ramp: float = 0.0
 
     def __post_init__(self) -> None:
         if self.probe_frame not in FRAMES:
@@ -372,6 +379,8 @@ class CavingCase:
             raise ValueError(f"CavingCase.top_pressure = {self.top_pressure} must be a finite pressure >= 0 (Pa)")
         if self.floor is not None and not (math.isfinite(self.floor) and self.floor >= 0):
             raise ValueError(f"CavingCase.floor = {self.floor} must be a depth >= 0 (m below the base) or None")
+        if not (math.isfinite(self.ramp) and self.ramp >= 0):
+            raise ValueError(f"CavingCase.ramp = {self.ramp} must be a finite release time >= 0 (s)")
         if self.overburden == "mass" and not self.cap > 0:
             raise ValueError(f"CavingCase.overburden = 'mass' needs a cap layer to carry it; cap = {self.cap}")
 
@@ -506,7 +515,7 @@ def _case_value(source: str, key: str, value: Any, default: Any) -> Any:
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ValueError(f"{source}: {key} must be a finite number, got {value!r}")
-    if value < 0 or (value == 0 and key not in ("start", "cap", "k0", "top_pressure", "floor")):
+    if value < 0 or (value == 0 and key not in ("start", "cap", "k0", "top_pressure", "floor", "ramp")):
         raise ValueError(f"{source}: {key} = {value!r} must be positive")
     return float(value)
 
@@ -590,5 +599,5 @@ def caving_model(case: CavingCase | None = None) -> Model:
     model.contact(laws[0], interfaces={"joints": laws[1]}, cracks=laws[2])
     model.fracture(insert_at=case.insert_at, min_size=case.min_size, check_every=case.check_every)
     for k, at in enumerate(times, start=1):
-        model.excavate(f"undercut_{k}", at=at)
+        model.excavate(f"undercut_{k}", at=at, ramp=case.ramp)
     return model

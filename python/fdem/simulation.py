@@ -676,10 +676,17 @@ class Simulation:
 
     def fragments(self, where: Any = None) -> dict[str, NDArray[Any]]:
         """Fragments (bodies) now: per fragment its ``area`` (m²), ``mass``
-        (kg per unit thickness), ``centroid`` (k, 2) and number of
-        ``elements``, largest first. ``where`` (a boolean mask over the
-        elements) counts only those elements, and the bodies that hold
-        any of them."""
+        (kg per unit thickness), ``centroid`` (k, 2), the ``velocity``
+        (k, 2; m/s) and ``displacement`` (k, 2; m) of its centre of mass
+        (each element weighted by its mass, at the mean of its nodes: the
+        lumped mass's momentum) and number of ``elements``, largest first.
+        ``where`` (a boolean mask over the elements) counts only those
+        elements, and the bodies that hold any of them.
+
+        A fragment's ``velocity`` beside its ``displacement`` says what
+        launched it: ``|v|²/2 + g·u`` (J/kg) is the kinetic energy per unit
+        mass beyond what its fall paid for (docs/caving.md, "Fragments
+        faster than free fall")."""
         labels = self.fragment_labels()
         keep = labels >= 0
         if where is not None:
@@ -690,11 +697,16 @@ class Simulation:
         areas = self.areas()[keep]
         rho = np.array([m.rho for m in self.model._materials])[self._core.element_materials()]
         mass = areas * rho[keep]
-        c = self.positions()[tri].mean(axis=1)
         area = np.bincount(lab, weights=areas, minlength=k)
         m = np.bincount(lab, weights=mass, minlength=k)
-        cx = np.bincount(lab, weights=mass * c[:, 0], minlength=k) / np.maximum(m, 1e-300)
-        cy = np.bincount(lab, weights=mass * c[:, 1], minlength=k) / np.maximum(m, 1e-300)
+
+        def mean(nodal: NDArray[np.float64]) -> NDArray[np.float64]:
+            e = nodal[tri].mean(axis=1)
+            return np.column_stack(
+                [np.bincount(lab, weights=mass * e[:, d], minlength=k) / np.maximum(m, 1e-300) for d in (0, 1)]
+            )
+
+        centroid, velocity, displacement = mean(self.positions()), mean(self.velocities()), mean(self.displacements())
         count = np.bincount(lab, minlength=k)
         order = np.argsort(-area, kind="stable")
         if where is not None:
@@ -702,7 +714,9 @@ class Simulation:
         return {
             "area": area[order],
             "mass": m[order],
-            "centroid": np.column_stack([cx, cy])[order],
+            "centroid": centroid[order],
+            "velocity": velocity[order],
+            "displacement": displacement[order],
             "elements": count[order],
         }
 
