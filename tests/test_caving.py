@@ -4,6 +4,7 @@ DESIGN §4.6 and §5). Tolerances beside each check."""
 from __future__ import annotations
 
 import csv
+import math
 
 import fdem
 import numpy as np
@@ -263,6 +264,9 @@ def test_quick_caving_writes_its_results(quick_caving):
     with open(out / "fragments.csv", newline="") as f:
         frags = list(csv.DictReader(f))
     assert len(frags) == summary["fragments"]
+    # each fragment's centre-of-mass motion, as Simulation.fragments() gives it
+    assert {"vx_m_s", "vy_m_s", "ux_m", "uy_m"} <= set(frags[0])
+    assert all(math.isfinite(float(r["vy_m_s"])) for r in frags)
     text = (out / "summary.txt").read_text()
     assert "energy_residual_J" in text
     # where the loop's time went: every phase of the step is clocked inside

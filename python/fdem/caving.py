@@ -23,7 +23,8 @@ everything into one directory:
 - ``abutment.csv``, ``abutment_profile.csv`` and ``abutment.png``: the
   vertical stress across the abutments at the probes' depth against the
   lithostatic value, and its peak beside each undercut edge over time;
-- ``fragments.csv`` and ``fragments.png``: fragment sizes at the end;
+- ``fragments.csv`` and ``fragments.png``: fragment sizes at the end (and
+  each fragment's centre-of-mass velocity and displacement);
 - ``caving_energy.csv`` and ``energy.png``: the energy account over time;
 - ``summary.txt``: what happened, in numbers.
 """
@@ -369,9 +370,20 @@ def run_caving(
     frags = sim.fragments(where=y_ref >= BOTTOM)
     with open(out / "fragments.csv", "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["fragment", "area_m2", "mass_kg_per_m", "x_m", "y_m", "elements"])
+        columns = ["fragment", "area_m2", "mass_kg_per_m", "x_m", "y_m", "elements"]
+        w.writerow([*columns, "vx_m_s", "vy_m_s", "ux_m", "uy_m"])
         for k in range(len(frags["area"])):
-            w.writerow([k, frags["area"][k], frags["mass"][k], *frags["centroid"][k], int(frags["elements"][k])])
+            w.writerow(
+                [
+                    k,
+                    frags["area"][k],
+                    frags["mass"][k],
+                    *frags["centroid"][k],
+                    int(frags["elements"][k]),
+                    *frags["velocity"][k],
+                    *frags["displacement"][k],
+                ]
+            )
     _plot_fragments(frags["area"], out / "fragments.png")
     _plot_energy(out / "caving_energy.csv", out / "energy.png")
     e = sim.energies()
