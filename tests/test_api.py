@@ -333,8 +333,8 @@ def test_write_vtu_makes_its_folder_and_plots_take_the_api_names(tmp_path):
 
 
 def test_fragments_report_their_centre_of_mass_motion():
-    """``Simulation.fragments()`` gives each body's centre-of-mass velocity
-    and displacement. A block thrown at (1.5, 2) m/s under g = 9.81 m/s²
+    """``Simulation.fragments()`` gives each body's centre-of-mass velocity,
+    displacement and kinetic energy per unit mass beyond its fall. A block thrown at (1.5, 2) m/s under g = 9.81 m/s²
     is in free flight: v = v₀ + g t and u = v₀ t + g t²/2 (the central
     difference integrates a constant acceleration exactly, to round-off;
     1e-9 of the largest term asked)."""
@@ -347,3 +347,5 @@ def test_fragments_report_their_centre_of_mass_motion():
     assert len(f["area"]) == 1
     assert f["velocity"][0] == pytest.approx([1.5, 2.0 - 9.81 * t], abs=1e-9 * 2.0)
     assert f["displacement"][0] == pytest.approx([1.5 * t, 2.0 * t - 0.5 * 9.81 * t**2], abs=1e-9 * 2.0 * t)
+    # in free flight the energy beyond the fall is the throw's, v₀²/2
+    assert f["energy_beyond_fall"][0] == pytest.approx(0.5 * (1.5**2 + 2.0**2), rel=1e-9)

@@ -409,7 +409,7 @@ def run_caving(
         "undercut_stages": sim.stages_done,
         "fragments": int(len(frags["area"])),
         "largest_fragment_m2": float(frags["area"][0]) if len(frags["area"]) else 0.0,
-        **_fragment_launch(frags, sim.model.gravity),
+        **_fragment_launch(frags),
         "fallen_area_m2": float(sim.areas()[fallen].sum()),
         "caved_area_m2": float(sim.areas()[caved].sum()),
         "time_step_s": sim.time_step,
@@ -434,19 +434,17 @@ def run_caving(
     return summary
 
 
-def _fragment_launch(frags: dict[str, Any], gravity: tuple[float, float]) -> dict[str, float]:
+def _fragment_launch(frags: dict[str, Any]) -> dict[str, float]:
     """The fastest fragment's centre-of-mass speed (m/s) and the most
     kinetic energy per unit mass any fragment holds beyond what its fall
-    paid for, ``|v|²/2 + g·u`` (J/kg, ``g`` the gravity vector, ``u`` the
-    centre's displacement): what a sudden release or a collision gave it
-    (docs/caving.md, "Fragments faster than free fall")."""
-    v, u = frags["velocity"], frags["displacement"]
+    paid for (J/kg, :meth:`Simulation.fragments`'s ``energy_beyond_fall``;
+    docs/caving.md, "Fragments faster than free fall")."""
+    v = frags["velocity"]
     if len(v) == 0:
         return {"fragment_speed_max_m_s": 0.0, "fragment_energy_beyond_fall_J_per_kg": 0.0}
-    beyond = 0.5 * (v**2).sum(axis=1) - (u @ np.asarray(gravity, dtype=float))
     return {
         "fragment_speed_max_m_s": float(np.hypot(v[:, 0], v[:, 1]).max()),
-        "fragment_energy_beyond_fall_J_per_kg": float(beyond.max()),
+        "fragment_energy_beyond_fall_J_per_kg": float(frags["energy_beyond_fall"].max()),
     }
 
 

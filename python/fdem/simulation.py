@@ -683,10 +683,10 @@ class Simulation:
         ``where`` (a boolean mask over the elements) counts only those
         elements, and the bodies that hold any of them.
 
-        A fragment's ``velocity`` beside its ``displacement`` says what
-        launched it: ``|v|²/2 + g·u`` (J/kg) is the kinetic energy per unit
-        mass beyond what its fall paid for (docs/caving.md, "Fragments
-        faster than free fall")."""
+        ``energy_beyond_fall`` (J/kg) is ``|v|²/2 − g·u`` with ``g`` the
+        model's gravity vector: the kinetic energy per unit mass beyond what
+        its fall paid for, which a release or a collision gave it
+        (docs/caving.md, "Fragments faster than free fall")."""
         labels = self.fragment_labels()
         keep = labels >= 0
         if where is not None:
@@ -707,6 +707,7 @@ class Simulation:
             )
 
         centroid, velocity, displacement = mean(self.positions()), mean(self.velocities()), mean(self.displacements())
+        beyond = 0.5 * (velocity**2).sum(axis=1) - displacement @ np.asarray(self.model.gravity, dtype=float)
         count = np.bincount(lab, minlength=k)
         order = np.argsort(-area, kind="stable")
         if where is not None:
@@ -717,6 +718,7 @@ class Simulation:
             "centroid": centroid[order],
             "velocity": velocity[order],
             "displacement": displacement[order],
+            "energy_beyond_fall": beyond[order],
             "elements": count[order],
         }
 
