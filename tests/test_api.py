@@ -349,3 +349,29 @@ def test_fragments_report_their_centre_of_mass_motion():
     assert f["displacement"][0] == pytest.approx([1.5 * t, 2.0 * t - 0.5 * 9.81 * t**2], abs=1e-9 * 2.0 * t)
     # in free flight the energy beyond the fall is the throw's, v₀²/2
     assert f["energy_beyond_fall"][0] == pytest.approx(0.5 * (1.5**2 + 2.0**2), rel=1e-9)
+
+
+def test_overlaps_find_a_node_driven_into_another_body_at_its_depth():
+    """``Simulation.overlaps()`` lists each node that lies inside an active
+    element it is not a node of, with its depth (distance to the nearest
+    edge). Without contact, the triangle (0.2, 0.2), (1.2, 0.2), (0.2, 1.2)
+    slides at 10 m/s from 1.5 m to the right into the triangle (0, 0),
+    (1, 0), (0, 1). In free flight its first vertex is at
+    `(0.2 + 1.5 − 10 t, 0.2)`. Inside the other triangle its depth is
+    `min(x, y, (1 − x − y)/√2)` (closed form, to 1e-9 m), and nothing else
+    overlaps. ``min_depth`` leaves out shallower nodes."""
+    pts = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.7, 0.2], [2.7, 0.2], [1.7, 1.2]]
+    mesh = fdem.Mesh(pts, [[0, 1, 2], [3, 4, 5]], node_sets={"moving": [3, 4, 5]})
+    model = fdem.Model(mesh, material=ROCK).set_initial_velocity((-10.0, 0.0), where=[3, 4, 5])
+    sim = fdem.Simulation(model)
+    assert len(sim.overlaps()["node"]) == 0
+    sim.run(until=0.14, progress=False, checkpoint=False)
+    x = 1.7 - 10.0 * sim.time
+    assert sim.positions()[3] == pytest.approx([x, 0.2], abs=1e-9)
+    depth = min(x, 0.2, (1.0 - x - 0.2) / np.sqrt(2.0))
+    assert depth > 0.05
+    o = sim.overlaps()
+    assert o["node"].tolist() == [3] and o["element"].tolist() == [0]
+    assert o["depth"][0] == pytest.approx(depth, abs=1e-9)
+    assert not o["in_contact"][0]
+    assert len(sim.overlaps(min_depth=depth + 0.01)["node"]) == 0

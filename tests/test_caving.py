@@ -209,6 +209,30 @@ def test_quick_caving_runs_undercuts_in_order_and_caves(quick_caving):
     assert summary["lithostatic_error"] < 0.02
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="a node that comes to lie inside another piece without entering through a facet's line "
+    "is never taken up by contact (docs/contact.md, 'What the entry rule costs'): 80 such nodes "
+    "deeper than 1% of the element size at 0.8 s",
+)
+def test_quick_caving_leaves_no_piece_inside_another(quick_caving):
+    """No node without a contact may lie inside another piece deeper than
+    1% of the mean element size `h` (√(2A) averaged, 3.1 m). Contact
+    penetrations under the overburden stay far below that. At the end of
+    the demo (0.8 s, 2-core Zen 3 VM, 2026-11-27) 80 nodes without contact
+    lie deeper: the deepest 0.41 m inside a neighbouring piece. This is the
+    contact's entry rule, which takes up a new contact only where the node
+    crosses the facet's line within the step (docs/contact.md). An expected
+    failure until contact can hold a node it finds already inside."""
+    _, summary = quick_caving
+    sim = summary["simulation"]
+    h = float(np.sqrt(2.0 * sim.areas()[sim.active()]).mean())
+    o = sim.overlaps(min_depth=0.01 * h)
+    loose = np.unique(o["node"][~o["in_contact"]])
+    deepest = float(o["depth"].max()) if len(o["depth"]) else 0.0
+    assert len(loose) == 0, f"{len(loose)} nodes without contact deeper than {0.01 * h:.3f} m (deepest {deepest:.3f} m)"
+
+
 def test_quick_caving_keeps_mass_and_closes_its_energy_balance(quick_caving):
     """Issue 6 (5): total nodal mass equals Σ ρ A of the elements left plus
     the mass that mass scaling added, Σ (s_e − 1) ρ A (to 1e-12 relative,

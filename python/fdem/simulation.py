@@ -722,6 +722,71 @@ class Simulation:
             "elements": count[order],
         }
 
+    def overlaps(self, min_depth: float = 0.0) -> dict[str, NDArray[Any]]:
+        """Nodes that lie inside an active element they are not a node of:
+        per such pair its ``node``, ``element`` (index into
+        :meth:`triangles`), ``depth`` (m, the node's distance to the
+        element's nearest edge) and whether the node is ``in_contact``,
+        deepest first; ``min_depth`` (m) leaves out shallower ones. Nodes
+        of excavated elements only are not counted.
+
+        A node in contact lies a little inside its facet's body (the
+        penalty's penetration); a node without a contact should lie
+        inside none. Where one does, the contact law let it in without
+        force (docs/contact.md, "What the entry rule costs")."""
+        x = self.positions()
+        tri_all = self.triangles()
+        ids = np.flatnonzero(self.active())
+        tri = tri_all[ids]
+        if len(tri) == 0:
+            none = np.zeros(0, np.int64)
+            return {"node": none, "element": none, "depth": np.zeros(0), "in_contact": np.zeros(0, bool)}
+        p = x[tri]
+        e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+        ccw = np.where(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] < 0.0, -1.0, 1.0)
+        # a grid of cells twice the median edge; an element is listed in
+        # every cell its box meets, a node looked up in its own cell
+        edges = np.linalg.norm(p - np.roll(p, 1, axis=1), axis=2)
+        cell = 2.0 * float(np.median(edges))
+        lo = np.floor(p.min(axis=1) / cell).astype(np.int64)
+        hi = np.floor(p.max(axis=1) / cell).astype(np.int64)
+        origin = lo.min(axis=0)
+        width = int(hi[:, 1].max() - origin[1]) + 2
+        span = hi - lo + 1
+        per = span[:, 0] * span[:, 1]
+        elem = np.repeat(np.arange(len(tri)), per)
+        k = np.arange(per.sum()) - np.repeat(np.cumsum(per) - per, per)
+        ix = lo[elem, 0] + k // span[elem, 1]
+        iy = lo[elem, 1] + k % span[elem, 1]
+        cells = (ix - origin[0]) * width + (iy - origin[1])
+        order = np.argsort(cells, kind="stable")
+        cells, elem = cells[order], elem[order]
+        live = np.zeros(len(x), bool)
+        live[tri.ravel()] = True
+        nodes = np.flatnonzero(live)
+        ij = np.floor(x[nodes] / cell).astype(np.int64)
+        node_cell = (ij[:, 0] - origin[0]) * width + (ij[:, 1] - origin[1])
+        start = np.searchsorted(cells, node_cell, side="left")
+        stop = np.searchsorted(cells, node_cell, side="right")
+        count = stop - start
+        n = np.repeat(nodes, count)
+        offset = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+        e = elem[np.repeat(start, count) + offset]
+        own = (tri[e] == n[:, None]).any(axis=1)
+        n, e = n[~own], e[~own]
+        q, a = x[n], p[e]
+        depth = np.full(len(n), np.inf)
+        for j in range(3):
+            u, d = a[:, j], a[:, (j + 1) % 3] - a[:, j]
+            s = (d[:, 0] * (q[:, 1] - u[:, 1]) - d[:, 1] * (q[:, 0] - u[:, 0])) / np.hypot(d[:, 0], d[:, 1])
+            depth = np.minimum(depth, s * ccw[e])
+        inside = depth > max(min_depth, 0.0)
+        n, e, depth = n[inside], ids[e[inside]], depth[inside]
+        order = np.lexsort((e, n, -depth))
+        touching = np.zeros(len(x), bool)
+        touching[np.asarray(self.contacts()["node"], dtype=np.int64)] = True
+        return {"node": n[order], "element": e[order], "depth": depth[order], "in_contact": touching[n[order]]}
+
     def set_prescribed_velocity(self, nodes: Any, values: Any) -> None:
         """Changes the prescribed velocity (m/s) of nodes that already have
         one: ``values`` is one ``(vx, vy)`` for all of them or a row per node."""
