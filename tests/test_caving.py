@@ -228,8 +228,9 @@ def test_quick_caving_leaves_no_piece_inside_another(quick_caving):
     sim = summary["simulation"]
     h = float(np.sqrt(2.0 * sim.areas()[sim.active()]).mean())
     o = sim.overlaps(min_depth=0.01 * h)
-    loose = np.unique(o["node"][~o["in_contact"]])
-    deepest = float(o["depth"].max()) if len(o["depth"]) else 0.0
+    free = ~o["in_contact"]
+    loose = np.unique(o["node"][free])
+    deepest = float(o["depth"][free].max()) if free.any() else 0.0
     assert len(loose) == 0, f"{len(loose)} nodes without contact deeper than {0.01 * h:.3f} m (deepest {deepest:.3f} m)"
 
 

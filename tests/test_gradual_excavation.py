@@ -77,8 +77,8 @@ def most_launched(ramp: float, tmp_path) -> float:
     """The tiny block-caving case (4 m elements, joint spacings ×8, stages
     every 60 ms) with its undercut released over ``ramp`` s: the largest
     kinetic energy per unit mass (J/kg) that any fragment holds beyond what
-    its fall paid for, ``|v|²/2 + g u_y`` of its centre of mass, sampled
-    every 10 ms to 0.5 s."""
+    its fall paid for (``Simulation.fragments()``'s ``energy_beyond_fall``,
+    of its centre of mass), sampled every 10 ms to 0.5 s."""
     from fdem.caving import CavingCase, run_caving
 
     case = CavingCase(size=4.0, joint_scale=8.0, support=5.0, interval=0.06, until=0.01, output_every=0.01, ramp=ramp)

@@ -735,9 +735,8 @@ class Simulation:
         inside none. Where one does, the contact law let it in without
         force (docs/contact.md, "What the entry rule costs")."""
         x = self.positions()
-        tri_all = self.triangles()
         ids = np.flatnonzero(self.active())
-        tri = tri_all[ids]
+        tri = self.triangles()[ids]
         if len(tri) == 0:
             none = np.zeros(0, np.int64)
             return {"node": none, "element": none, "depth": np.zeros(0), "in_contact": np.zeros(0, bool)}
@@ -752,10 +751,15 @@ class Simulation:
         hi = np.floor(p.max(axis=1) / cell).astype(np.int64)
         origin = lo.min(axis=0)
         width = int(hi[:, 1].max() - origin[1]) + 2
+
+        def within(counts: NDArray[np.int64]) -> NDArray[np.int64]:
+            # 0, 1, …, counts[i] − 1 for each i in turn
+            return np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+
         span = hi - lo + 1
         per = span[:, 0] * span[:, 1]
         elem = np.repeat(np.arange(len(tri)), per)
-        k = np.arange(per.sum()) - np.repeat(np.cumsum(per) - per, per)
+        k = within(per)
         ix = lo[elem, 0] + k // span[elem, 1]
         iy = lo[elem, 1] + k % span[elem, 1]
         cells = (ix - origin[0]) * width + (iy - origin[1])
@@ -770,8 +774,7 @@ class Simulation:
         stop = np.searchsorted(cells, node_cell, side="right")
         count = stop - start
         n = np.repeat(nodes, count)
-        offset = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
-        e = elem[np.repeat(start, count) + offset]
+        e = elem[np.repeat(start, count) + within(count)]
         own = (tri[e] == n[:, None]).any(axis=1)
         n, e = n[~own], e[~own]
         q, a = x[n], p[e]
