@@ -2,7 +2,7 @@
 inside an element they are not a node of, at the end of the fragmenting
 impact (`fracture_impact.py`), by depth as a share of the mean element
 size `h` (√(2A) averaged), with and without a contact on the node
-(docs/contact.md, "What the entry rule costs").
+(docs/contact.md, "Which facet a node touches", item 7).
 
 Run: python benchmarks/overlaps.py [--elements 1e4] [--duration 4e-4] [--threads 2]
      python benchmarks/overlaps.py --caving caving_output_quick/caving.ckpt [--full]

@@ -189,17 +189,18 @@ def without_lineage(path, out, parents: np.ndarray, bonds: int, materials: int) 
     the ``materials`` and one f64 each; the count of the materials and
     each one's softening curve, one byte for linear softening, and the
     count of the bonds and each one's kink, one byte for none; the
-    renumbering interval, one byte for none), resealed, at ``out``."""
+    renumbering interval, one byte for none; the contact offsets, two
+    empty lists for a run that holds none), resealed, at ``out``."""
     import struct
     import zlib
 
     b = Path(path).read_bytes()
-    assert b[:8] == b"FDEMCKPT" and struct.unpack_from("<I", b, 8)[0] == 11
+    assert b[:8] == b"FDEMCKPT" and struct.unpack_from("<I", b, 8)[0] == 12
     s_len, u_len = struct.unpack_from("<QQ", b, 16)
     varint = lambda n: max(1, -(-int(n).bit_length() // 7))  # noqa: E731
     block = varint(len(parents)) + sum(varint(p) for p in parents) + varint(bonds) + 16 * bonds + 8 + 2
     block += varint(bonds) + 49 * bonds + varint(materials) + 8 * materials
-    block += varint(materials) + materials + varint(bonds) + bonds + 1
+    block += varint(materials) + materials + varint(bonds) + bonds + 1 + 2
     state, user = b[40 : 40 + s_len - block], b[40 + s_len :]
     head = bytearray(b[:40])
     struct.pack_into("<I", head, 8, 6)
@@ -219,6 +220,7 @@ def test_a_checkpoint_without_lineage_gets_it_back_from_the_model(tmp_path):
     origins = sim.element_origins()
     assert sim.n_elements > model.mesh.n_elements and sim.renumberings > 0
     path = sim.save_checkpoint(tmp_path / "v7.ckpt")
+    assert not sim.contacts()["offset"].any()
     without_lineage(path, tmp_path / "v6.ckpt", sim.element_parents(), len(sim.bonds()["nodes"]), len(model._materials))
     raw, _ = fdem._core.Simulation.read_checkpoint(str(tmp_path / "v6.ckpt"), 1)
     assert np.array_equal(raw.element_parents(), np.arange(sim.n_elements))

@@ -421,7 +421,11 @@ class Simulation:
     def contacts(self) -> dict[str, NDArray[Any]]:
         """The active contacts: ``node``, ``facet`` (n, 2) node pairs, ``xi``
         (position on the facet), ``gap`` (m, negative = penetration),
-        ``normal_force`` and ``tangential_force`` (N/m), ``slipping``."""
+        ``normal_force`` and ``tangential_force`` (N/m), ``slipping``, and
+        ``offset`` (m): the penetration the spring does not count, the depth
+        at which a node found already inside the facet's element was taken
+        up (docs/contact.md, "Which facet a node touches", item 7; 0 for a
+        contact entered through the facet's line)."""
         return dict(self._core.contacts())
 
     def contact_stats(self) -> dict[str, int]:
@@ -733,7 +737,7 @@ class Simulation:
         A node in contact lies a little inside its facet's body (the
         penalty's penetration); a node without a contact should lie
         inside none. Where one does, the contact law let it in without
-        force (docs/contact.md, "What the entry rule costs")."""
+        force (docs/contact.md, "Which facet a node touches", item 7)."""
         x = self.positions()
         ids = np.flatnonzero(self.active())
         tri = self.triangles()[ids]

@@ -29,6 +29,18 @@ pub struct SurfaceFacet {
     /// nodes' rows without two more random reads of `index_of`.
     #[serde(skip)]
     pub ends: [u32; 2],
+    /// The mesh id of the third node of the facet's element, [`NONE`] where
+    /// the builder did not give it (derived, not saved: set by
+    /// [`Surface::set_apexes`] after building or restoring). A node found
+    /// behind the facet is inside that body only if it is inside this
+    /// triangle: the depth rectangle behind a facet reaches past the
+    /// triangle's sides, into whatever lies beside it.
+    #[serde(skip, default = "no_apex")]
+    pub apex: u32,
+}
+
+fn no_apex() -> u32 {
+    NONE
 }
 
 /// The free surfaces of the current mesh.
@@ -92,7 +104,15 @@ impl Surface {
                 let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
                 let c = apex[k];
                 let height = ((c[0] - pa[0]) * d[1] - (c[1] - pa[1]) * d[0]).abs() / length;
-                SurfaceFacet { nodes: [a, b], law, length, depth: 0.5 * height, key: keys[k], ends: [NONE; 2] }
+                SurfaceFacet {
+                    nodes: [a, b],
+                    law,
+                    length,
+                    depth: 0.5 * height,
+                    key: keys[k],
+                    ends: [NONE; 2],
+                    apex: NONE,
+                }
             })
             .collect();
         Self::indexed(n_nodes, surface_facets, x_ref)
@@ -213,12 +233,20 @@ impl Surface {
             .map(|(k, &(key, old))| {
                 facet_map[old as usize] = k as u32;
                 let f = &self.facets[old as usize];
-                SurfaceFacet { nodes: f.nodes.map(|n| node_map[n as usize]), key, ends: [NONE; 2], ..*f }
+                let apex = if f.apex == NONE { NONE } else { node_map[f.apex as usize] };
+                SurfaceFacet { nodes: f.nodes.map(|n| node_map[n as usize]), key, ends: [NONE; 2], apex, ..*f }
             })
             .collect();
         let surface = Self::indexed(node_map.len(), facets, x_ref);
         let node_map_b = self.nodes.iter().map(|&n| surface.index_of[node_map[n as usize] as usize]).collect();
         (surface, facet_map, node_map_b)
+    }
+
+    /// Sets every facet's [`SurfaceFacet::apex`] from its key: `apex(key)`
+    /// is the mesh id of the third node of the facet's element (the key's
+    /// meaning is the builder's).
+    pub fn set_apexes(&mut self, apex: impl Fn(u32) -> u32 + Sync) {
+        self.facets.par_iter_mut().with_min_len(CHUNK).for_each(|f| f.apex = apex(f.key));
     }
 
     /// Sets the derived data that is not saved ([`SurfaceFacet::ends`],

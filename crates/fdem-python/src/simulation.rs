@@ -725,6 +725,7 @@ impl PySimulation {
             d.set_item("normal_force", c.iter().map(|t| t.normal_force).collect::<Vec<_>>().into_pyarray(py))?;
             d.set_item("tangential_force", c.iter().map(|t| t.tangential_force).collect::<Vec<_>>().into_pyarray(py))?;
             d.set_item("slipping", c.iter().map(|t| t.slipping).collect::<Vec<_>>().into_pyarray(py))?;
+            d.set_item("offset", c.iter().map(|t| t.offset).collect::<Vec<_>>().into_pyarray(py))?;
             Ok(d)
         })
     }

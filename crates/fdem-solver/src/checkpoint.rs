@@ -65,8 +65,9 @@ pub const MAGIC: &[u8; 8] = b"FDEMCKPT";
 /// [`Format8`] (the bonds' offsets and the local damping), format 9 then
 /// [`Format9`] (the bonds' mixed-mode laws and the materials' `G_II`),
 /// format 10 then [`Format10`] (the materials' softening curves and the
-/// bonds' kinks), format 11 then [`Format11`] (the renumbering interval).
-pub const FORMAT_VERSION: u32 = 11;
+/// bonds' kinks), format 11 then [`Format11`] (the renumbering interval),
+/// format 12 then [`Format12`] (the contact memories' offsets).
+pub const FORMAT_VERSION: u32 = 12;
 const HEADER: usize = 40;
 
 /// Why a checkpoint could not be written or read.
@@ -219,6 +220,7 @@ fn assemble(o: StateOwned, pool: Arc<rayon::ThreadPool>) -> Simulation {
     };
     // derived data, not saved
     sim.surface.derive(&sim.nodes.x0);
+    crate::topology::set_apexes(&mut sim.surface, &sim.elems.conn);
     if let Some(c) = sim.contact.as_mut() {
         for o in c.out.iter_mut().chain(c.corner_out.iter_mut()) {
             o.locate(&sim.surface);
@@ -262,6 +264,7 @@ impl Simulation {
         state.extend(postcard::to_stdvec(&Format9::of(self)).expect("format-9 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format10::of(self)).expect("format-10 data is serialisable"));
         state.extend(postcard::to_stdvec(&Format11::of(self)).expect("format-11 data is serialisable"));
+        state.extend(postcard::to_stdvec(&Format12::of(self)).expect("format-12 data is serialisable"));
         let mut out = Vec::with_capacity(HEADER + state.len() + user.len());
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -370,6 +373,12 @@ impl Simulation {
         } else {
             (Format11 { renumber_every: renumbering.renumber.map(|_| crate::RENUMBER_INTERVAL) }, rest)
         };
+        let (contact_offsets, rest) = if version >= 12 {
+            let (o, rest) = postcard::take_from_bytes::<Format12>(rest).map_err(decode)?;
+            (Some(o), rest)
+        } else {
+            (None, rest)
+        };
         if !rest.is_empty() {
             return Err(CheckpointError::Invalid(format!("{} bytes after the state", rest.len())));
         }
@@ -462,6 +471,9 @@ impl Simulation {
             }
         }
         corners.apply(&mut owned);
+        if let Some(o) = contact_offsets {
+            o.apply(&mut owned)?;
+        }
         if version < 5 {
             for st in &mut owned.elems.state {
                 st.direction_code = fdem_material::principal::DirectionCode::of_angle(st.direction_code);

@@ -427,6 +427,7 @@ impl ContactModel {
                 resumed: s.facet,
                 elastic_gap: s.elastic_gap,
                 depth,
+                offset: s.offset,
             };
             // whether the node `node` (boundary index `b`) and its own
             // facets are untouched (never without `touched`)
@@ -490,7 +491,13 @@ impl ContactModel {
                             let of = &old.facets[s.facet as usize];
                             let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
                             if f != NONE && same_ends(new.facets[f as usize].nodes, of.nodes) {
-                                *slot = ContactState { facet: f, resumed: NONE, elastic_gap: s.elastic_gap, depth };
+                                *slot = ContactState {
+                                    facet: f,
+                                    resumed: NONE,
+                                    elastic_gap: s.elastic_gap,
+                                    depth,
+                                    offset: s.offset,
+                                };
                                 whole &= changed[f as usize] == 0;
                                 carried[k] = Some((f, ob));
                             } else {
@@ -536,7 +543,13 @@ impl ContactModel {
                         let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
                         let pieces = created || split.binary_search(&node).is_ok();
                         *slot = if !pieces && f != NONE && same_ends(new.facets[f as usize].nodes, of.nodes) {
-                            ContactState { facet: f, resumed: NONE, elastic_gap: s.elastic_gap, depth }
+                            ContactState {
+                                facet: f,
+                                resumed: NONE,
+                                elastic_gap: s.elastic_gap,
+                                depth,
+                                offset: s.offset,
+                            }
                         } else {
                             resumed(s, depth)
                         };

@@ -386,9 +386,9 @@ impl Simulation {
         }
         order
             .into_iter()
-            .map(|(k, b)| (b, if k == 0 { &c.out[b] } else { &c.corner_out[b] }))
-            .filter(|(_, o)| o.facet != NONE)
-            .map(|(b, o)| ContactInfo {
+            .map(|(k, b)| (b, if k == 0 { (&c.out[b], &c.states[b]) } else { (&c.corner_out[b], &c.corner_states[b]) }))
+            .filter(|(_, (o, _))| o.facet != NONE)
+            .map(|(b, (o, m))| ContactInfo {
                 node: self.layout.node_id(self.surface.nodes[b]),
                 facet: self.surface.facets[o.facet as usize].nodes.map(|v| self.layout.node_id(v)),
                 xi: o.xi,
@@ -396,6 +396,7 @@ impl Simulation {
                 normal_force: o.normal_force,
                 tangential_force: o.tangential_force,
                 slipping: o.slipping,
+                offset: m.offset,
             })
             .collect()
     }

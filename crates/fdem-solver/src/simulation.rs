@@ -115,6 +115,11 @@ pub struct ContactInfo {
     pub tangential_force: f64,
     /// Whether it slipped in the last step.
     pub slipping: bool,
+    /// Penetration (m, ≥ 0) its spring does not count: the depth at which
+    /// the node was found already inside the facet's element
+    /// (docs/contact.md, "Which facet a node touches", item 7); 0 for a
+    /// contact entered through the facet's line.
+    pub offset: f64,
 }
 
 /// A running explicit FDEM simulation: all state, and the thread pool that

@@ -125,7 +125,16 @@ pub(crate) fn build_surface(
         apex.extend_from_slice(&a);
         keys.extend_from_slice(&k);
     }
-    Surface::with_keys(x_ref.len(), &list, x_ref, &apex, &keys)
+    let mut surface = Surface::with_keys(x_ref.len(), &list, x_ref, &apex, &keys);
+    set_apexes(&mut surface, conn);
+    surface
+}
+
+/// Sets the surface's facets' apexes ([`fdem_contact::SurfaceFacet::apex`])
+/// from their keys, `3 e + k` for edge `k` of element `e`, whose third node
+/// is `conn[e][(k + 2) % 3]`: after building or restoring a surface.
+pub(crate) fn set_apexes(surface: &mut Surface, conn: &[[u32; 3]]) {
+    surface.set_apexes(|key| conn[(key / 3) as usize][((key % 3 + 2) % 3) as usize]);
 }
 
 /// A set of nodes as one bit per node: membership in O(1) where a node

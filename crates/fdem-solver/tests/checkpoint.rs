@@ -197,6 +197,10 @@ fn format10_len(sim: &Simulation, materials: usize) -> usize {
 /// (the interval `None`).
 const FORMAT11_LEN: usize = 1;
 
+/// Bytes of the format-12 block of a run whose contact memories hold no
+/// offset (two empty lists).
+const FORMAT12_LEN: usize = 2;
+
 /// The plate with contact on its own surface (a dashpot of damping ratio
 /// 0.1).
 fn plate_with_contact(n: usize) -> ModelSpec {
@@ -232,7 +236,7 @@ fn a_format_1_file_still_reads_with_physical_masses() {
             + format8_len(&a)
             + format9_len(&a, 1)
             + format10_len(&a, 1)
-            + FORMAT11_LEN,
+            + (FORMAT11_LEN + FORMAT12_LEN),
     );
     let (mut b, user) = Simulation::from_checkpoint_bytes(&v1, 1).unwrap();
     assert_eq!(user, b"meta");
@@ -260,7 +264,7 @@ fn a_format_2_file_with_contact_reads_without_corner_contacts() {
         + format8_len(&a)
         + format9_len(&a, 1)
         + format10_len(&a, 1)
-        + FORMAT11_LEN;
+        + (FORMAT11_LEN + FORMAT12_LEN);
     let v2 = downgrade(&v3, 2, 2 * varint(nb) + nb * (22 + 70) + blocks);
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v2, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v3, "format 2 read back differs");
@@ -303,7 +307,12 @@ fn a_format_4_file_keeps_its_crack_directions() {
     let v4 = downgrade(
         &v6,
         4,
-        format6_len(0) + format7_len(&a) + format8_len(&a) + format9_len(&a, 1) + format10_len(&a, 1) + FORMAT11_LEN,
+        format6_len(0)
+            + format7_len(&a)
+            + format8_len(&a)
+            + format9_len(&a, 1)
+            + format10_len(&a, 1)
+            + (FORMAT11_LEN + FORMAT12_LEN),
     );
     let (b, _) = Simulation::from_checkpoint_bytes(&v4, 1).unwrap();
     let pi = std::f64::consts::PI;
@@ -331,7 +340,7 @@ fn a_format_5_file_reads_without_its_dashpots_and_a_format_6_file_with_them() {
             + format8_len(&a)
             + format9_len(&a, 1)
             + format10_len(&a, 1)
-            + FORMAT11_LEN,
+            + (FORMAT11_LEN + FORMAT12_LEN),
     );
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v5, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v6, "format 5 read back differs");
@@ -451,8 +460,11 @@ fn a_format_6_file_reads_without_lineage_and_a_bad_lineage_is_refused() {
     let v7 = a.checkpoint_bytes(b"");
     let m = a.n_elements();
     assert!(a.element_parents().iter().enumerate().all(|(e, &p)| p as usize == e));
-    let v6 =
-        downgrade(&v7, 6, format7_len(&a) + format8_len(&a) + format9_len(&a, 1) + format10_len(&a, 1) + FORMAT11_LEN);
+    let v6 = downgrade(
+        &v7,
+        6,
+        format7_len(&a) + format8_len(&a) + format9_len(&a, 1) + format10_len(&a, 1) + (FORMAT11_LEN + FORMAT12_LEN),
+    );
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v6, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v7, "format 6 read back differs");
     // nothing to place: every element is one of the model's
@@ -461,7 +473,8 @@ fn a_format_6_file_reads_without_lineage_and_a_bad_lineage_is_refused() {
     // of the state, a one-byte varint here)
     let s_len = u64::from_le_bytes(v7[16..24].try_into().unwrap()) as usize;
     let mut bad = v7.clone();
-    let last = 40 + s_len - 1 - format8_len(&a) - format9_len(&a, 1) - format10_len(&a, 1) - FORMAT11_LEN;
+    let last =
+        40 + s_len - 1 - format8_len(&a) - format9_len(&a, 1) - format10_len(&a, 1) - (FORMAT11_LEN + FORMAT12_LEN);
     assert_eq!(bad[last] as usize, m - 1);
     bad[last] = m as u8;
     let crc = crc32fast::hash(&bad[40..]);
@@ -480,14 +493,15 @@ fn a_format_7_file_reads_with_slack_bonds_and_bad_offsets_are_refused() {
     a.step(10).unwrap();
     let v8 = a.checkpoint_bytes(b"");
     assert!(a.bonds().is_empty());
-    let v7 = downgrade(&v8, 7, format8_len(&a) + format9_len(&a, 1) + format10_len(&a, 1) + FORMAT11_LEN);
+    let v7 =
+        downgrade(&v8, 7, format8_len(&a) + format9_len(&a, 1) + format10_len(&a, 1) + (FORMAT11_LEN + FORMAT12_LEN));
     let (b, _) = Simulation::from_checkpoint_bytes(&v7, 1).unwrap();
     assert!(b.checkpoint_bytes(b"") == v8, "format 7 read back differs");
     // one offset where there is no bond: the count (the byte before the
     // local damping's f64 and the two empty lists) made 1 and two f64 put
     // after it
     let s_len = u64::from_le_bytes(v8[16..24].try_into().unwrap()) as usize;
-    let f9 = format9_len(&a, 1) + format10_len(&a, 1) + FORMAT11_LEN;
+    let f9 = format9_len(&a, 1) + format10_len(&a, 1) + (FORMAT11_LEN + FORMAT12_LEN);
     let mut state = v8[40..40 + s_len - f9 - 10].to_vec();
     *state.last_mut().unwrap() = 1;
     state.extend_from_slice(&[0u8; 16 + 8 + 2]);
@@ -530,7 +544,7 @@ fn a_format_8_file_reads_with_isotropic_bonds_and_bad_bond_laws_are_refused() {
         assert!(dn > 0.0, "bond {:?} closed by {dn} m along its normal", bond.nodes);
     }
     let v9 = a.checkpoint_bytes(b"");
-    let f10 = format10_len(&a, 2) + FORMAT11_LEN;
+    let f10 = format10_len(&a, 2) + (FORMAT11_LEN + FORMAT12_LEN);
     let f9 = varint(nb) + nb * (1 + 6 * 8) + varint(2) + 2 * 8;
     let v8 = downgrade(&v9, 8, f9 + f10);
     let (mut b, _) = Simulation::from_checkpoint_bytes(&v8, 1).unwrap();
@@ -580,13 +594,13 @@ fn bilinear_curves_and_kinks_survive_a_restart_and_a_format_9_file_reads_linear(
     // the format-10 block: two materials (variant byte and two f64 each),
     // then each bond's option tag and, for a kink, two f64
     let f10 = varint(2) + 2 * 17 + varint(nb) + nb + 16 * kinked;
-    let v9 = downgrade(&v10, 9, f10 + FORMAT11_LEN);
+    let v9 = downgrade(&v10, 9, f10 + (FORMAT11_LEN + FORMAT12_LEN));
     let (c, _) = Simulation::from_checkpoint_bytes(&v9, 1).unwrap();
     assert!(c.bonds().iter().all(|b| b.mode.is_some_and(|m| m.kink.is_none())));
     // the last bond's kink made 2 in its traction (the last f64 of the state)
     assert!(c.bonds().len() == nb && last_kinked, "the last bond has no kink to spoil");
     let s_len = u64::from_le_bytes(v10[16..24].try_into().unwrap()) as usize;
-    let bad = with_f64_at(&v10, 40 + s_len - FORMAT11_LEN - 8, 2.0);
+    let bad = with_f64_at(&v10, 40 + s_len - (FORMAT11_LEN + FORMAT12_LEN) - 8, 2.0);
     let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
     assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("kinks")), "{e}");
 }
@@ -603,17 +617,52 @@ fn a_format_10_file_with_renumbering_renumbers_every_thousand_steps() {
     let v11 = a.checkpoint_bytes(b"");
     let (b, _) = Simulation::from_checkpoint_bytes(&v11, 1).unwrap();
     assert_eq!(b.settings().renumber_every, None);
-    let v10 = downgrade(&v11, 10, FORMAT11_LEN);
+    let v10 = downgrade(&v11, 10, FORMAT11_LEN + FORMAT12_LEN);
     let (c, _) = Simulation::from_checkpoint_bytes(&v10, 1).unwrap();
     assert_eq!(c.settings().renumber_every, Some(fdem_solver::RENUMBER_INTERVAL));
     let s_len = u64::from_le_bytes(v11[16..24].try_into().unwrap()) as usize;
     // `Some(0)`: the option's tag 1, then the varint 0, in place of `None`
-    let mut bad = v11[..40 + s_len - 1].to_vec();
+    let mut bad = v11[..40 + s_len - 1 - FORMAT12_LEN].to_vec();
     bad.extend_from_slice(&[1, 0]);
+    bad.extend_from_slice(&v11[40 + s_len - FORMAT12_LEN..40 + s_len]);
     bad[16..24].copy_from_slice(&((s_len + 1) as u64).to_le_bytes());
     let crc = crc32fast::hash(&bad[40..]);
     bad[32..36].copy_from_slice(&crc.to_le_bytes());
     reseal(&mut bad);
     let e = Simulation::from_checkpoint_bytes(&bad, 1).err().unwrap();
     assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("interval")), "{e}");
+}
+
+#[test]
+fn contact_offsets_survive_a_restart_a_format_11_file_reads_without_and_bad_ones_are_refused() {
+    // format 12 keeps the offsets of contacts taken up where their node was
+    // found inside (docs/contact.md, item 7) as (boundary index, offset)
+    // lists; a file without any holds two empty lists
+    let mut a = Simulation::new(plate_with_contact(6), 1).unwrap();
+    a.step(30).unwrap();
+    let v12 = a.checkpoint_bytes(b"");
+    let s_len = u64::from_le_bytes(v12[16..24].try_into().unwrap()) as usize;
+    assert_eq!(&v12[40 + s_len - FORMAT12_LEN..40 + s_len], &[0, 0]);
+    let v11 = downgrade(&v12, 11, FORMAT12_LEN);
+    let (b, _) = Simulation::from_checkpoint_bytes(&v11, 1).unwrap();
+    assert!(b.checkpoint_bytes(b"") == v12, "format 11 read back differs");
+    // the first list given one entry: boundary node 0, `offset` m
+    let with = |offset: f64, node: u8| {
+        let mut v = v12[..40 + s_len - FORMAT12_LEN].to_vec();
+        v.extend_from_slice(&[1, node]);
+        v.extend_from_slice(&offset.to_le_bytes());
+        v.push(0);
+        v[16..24].copy_from_slice(&((s_len + 9) as u64).to_le_bytes());
+        let crc = crc32fast::hash(&v[40..]);
+        v[32..36].copy_from_slice(&crc.to_le_bytes());
+        reseal(&mut v);
+        v
+    };
+    let good = with(1e-3, 0);
+    let (c, _) = Simulation::from_checkpoint_bytes(&good, 1).unwrap();
+    assert!(c.checkpoint_bytes(b"") == good, "an offset did not survive the restart");
+    for (bad, node) in [(-1e-3, 0), (f64::NAN, 0), (1e-3, 127)] {
+        let e = Simulation::from_checkpoint_bytes(&with(bad, node), 1).err().unwrap();
+        assert!(matches!(e, CheckpointError::Invalid(ref s) if s.contains("offsets")), "{bad} at {node}: {e}");
+    }
 }

@@ -185,11 +185,13 @@ fn evaluate_where(
                     continue;
                 }
                 if keep(b) {
+                    let faces = inp.surface.faces[b];
                     for (k, (state, contact)) in [(&st[j], &oc[j]), (&st2[j], &oc2[j])].into_iter().enumerate() {
                         if busy[j] & (1 << k) != 0 && contact.facet != NONE {
                             acc.contacts += 1;
                             acc.kept += 1;
-                            acc.stored += held_energy(inp, contact, state.elastic_gap);
+                            let face = (faces[0] != NONE).then(|| faces[k]);
+                            acc.stored += held_energy(inp, b, face, contact, state);
                         }
                     }
                     continue;

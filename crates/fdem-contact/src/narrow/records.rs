@@ -7,7 +7,7 @@ use super::Dashpot;
 use crate::surface::Surface;
 use crate::{Vec2, NONE};
 
-/// What a boundary node remembers between steps. 24 bytes: it is read and
+/// What a boundary node remembers between steps. 32 bytes: it is read and
 /// written for every contact in every step (with the resumed direction in
 /// the record, 48 bytes, a late step of the paper-scale caving run took
 /// about 3% longer; docs/contact.md).
@@ -38,11 +38,20 @@ pub struct ContactState {
     /// deeper than this plus the step's approach: its spring energy would
     /// otherwise jump without work.
     pub depth: f64,
+    /// Penetration (m, ≥ 0) the spring does not count: the depth beyond the
+    /// spring it had at which a node found already inside a facet's
+    /// element, without entering it through its line, was taken up
+    /// (docs/contact.md, "Which facet a node touches", item 7). The spring
+    /// acts on `depth − offset` only, so taking it up holds the node where
+    /// it is without energy from nothing; the offset follows the node out
+    /// as it backs off and never grows. Zero for a contact entered through
+    /// the facet's line. Checkpoints keep the non-zero ones (format 12).
+    pub offset: f64,
 }
 
 impl Default for ContactState {
     fn default() -> Self {
-        Self { facet: NONE, resumed: NONE, elastic_gap: 0.0, depth: 0.0 }
+        Self { facet: NONE, resumed: NONE, elastic_gap: 0.0, depth: 0.0, offset: 0.0 }
     }
 }
 
@@ -61,7 +70,7 @@ struct SavedState {
 
 impl From<SavedState> for ContactState {
     fn from(s: SavedState) -> Self {
-        ContactState { facet: s.facet, resumed: NONE, elastic_gap: s.elastic_gap, depth: s.depth }
+        ContactState { facet: s.facet, resumed: NONE, elastic_gap: s.elastic_gap, depth: s.depth, offset: 0.0 }
     }
 }
 

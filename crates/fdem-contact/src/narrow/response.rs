@@ -5,7 +5,7 @@
 //! share of the interface (appendix D), and the energy the springs hold.
 
 use super::projection::projects_inside;
-use super::search::resumed_direction;
+use super::search::{resumed_direction, FOUND_INSIDE};
 use super::{ContactPartial, ContactState, Dashpot, FacetFrame, NarrowInputs, NodeContact};
 use crate::law::friction_update;
 use crate::surface::Surface;
@@ -75,17 +75,41 @@ fn cohesive_length(inp: &NarrowInputs<'_>, b: usize, f: u32, n: Vec2, face: Opti
     }
 }
 
-/// The energy held in contact `c`'s springs (J/m) with the elastic
-/// tangential gap `elastic_gap` (its memory's): `½ α_n g² + ½ α_t g_tᵉ²`
-/// as [`respond`] counts it, with `α_n = f_s / (−g)` from the spring's
-/// normal force `f_s = −α_n g` (a contact's gap is negative) and `α_t =
-/// α_n k_t / k_n` (both springs share the node's tributary length).
+/// The springs' share of boundary node `b` on a contact whose facet has
+/// normal `n`: its tributary length (m) and the mass (kg/m) its dashpot
+/// sees. At a corner (`face`, the node's bearing facet) the bearing face's
+/// half, and the dashpot sees that face's share of the node's mass, so
+/// that the two contacts' dashpots together never exceed one on the whole
+/// node (the stable step's bound).
 #[inline]
-pub(super) fn held_energy(inp: &NarrowInputs<'_>, c: &NodeContact, elastic_gap: f64) -> f64 {
+fn share(inp: &NarrowInputs<'_>, b: usize, node: usize, n: Vec2, face: Option<u32>) -> (f64, f64) {
+    match face {
+        None => (tributary(inp.surface, inp.frames, b, n), inp.mass[node]),
+        Some(k) => {
+            let m = inp.frames[k as usize].normal();
+            let half = 0.5 * inp.surface.facets[k as usize].length;
+            (half * (-(m[0] * n[0] + m[1] * n[1])).max(0.0), inp.mass[node] * half / inp.surface.tributary_max(b))
+        }
+    }
+}
+
+/// The energy held in contact `c`'s springs (J/m), boundary node `b`
+/// bearing with `face` (as in [`respond`]) and memory `state`:
+/// `½ α_n (−g − offset)² + ½ α_t g_tᵉ²` as [`respond`] counts it.
+#[inline]
+pub(super) fn held_energy(
+    inp: &NarrowInputs<'_>,
+    b: usize,
+    face: Option<u32>,
+    c: &NodeContact,
+    state: &ContactState,
+) -> f64 {
     let law = &inp.laws[inp.surface.facets[c.facet as usize].law as usize];
-    let depth = -c.gap;
-    let alpha_t = c.dashpot.spring / depth * (law.shear_stiffness / law.normal_stiffness);
-    0.5 * c.dashpot.spring * depth + 0.5 * alpha_t * elastic_gap * elastic_gap
+    let node = inp.surface.nodes[b] as usize;
+    let (trib, _) = share(inp, b, node, inp.frames[c.facet as usize].normal(), face);
+    let loaded = (-c.gap - state.offset).max(0.0);
+    0.5 * law.normal_stiffness * trib * loaded * loaded
+        + 0.5 * law.shear_stiffness * trib * state.elastic_gap * state.elastic_gap
 }
 
 /// The forces of one contact of boundary node `b` (mesh id `node`) on the
@@ -117,14 +141,7 @@ pub(super) fn respond(
     // that face's share of the node's mass, so that the two contacts'
     // dashpots together never exceed one on the whole node (the stable
     // step's bound)
-    let (trib, ms) = match face {
-        None => (tributary(inp.surface, inp.frames, b, n), inp.mass[node]),
-        Some(k) => {
-            let m = inp.frames[k as usize].normal();
-            let half = 0.5 * inp.surface.facets[k as usize].length;
-            (half * (-(m[0] * n[0] + m[1] * n[1])).max(0.0), inp.mass[node] * half / inp.surface.tributary_max(b))
-        }
-    };
+    let (trib, ms) = share(inp, b, node, n, face);
     let (alpha_n, alpha_t) = (law.normal_stiffness * trib, law.shear_stiffness * trib);
     // The dashpot is sized for the pair's relative motion: critical damping
     // of a spring between two masses uses their reduced mass. Sizing it with
@@ -133,7 +150,20 @@ pub(super) fn respond(
     let mf = (1.0 - xi) * inp.mass[ia] + xi * inp.mass[ib];
     let m = if mf > 0.0 { ms * mf / (ms + mf) } else { ms };
     let dashpot = law.damping_ratio * 2.0 * (alpha_n * m).sqrt();
-    let spring = -alpha_n * gap;
+    // a node taken up where it was found inside does not count that depth
+    // beyond the spring it had (none for a node without contact): a node
+    // whose contact moves to a facet it lies deeper in keeps its load, not
+    // drops it and sinks; the offset follows it out and never grows
+    // (`ContactState::offset`)
+    let depth = -gap;
+    let offset = if rank == FOUND_INSIDE {
+        (depth - (state.depth - state.offset).max(0.0)).max(0.0)
+    } else if rank == 2 && state.resumed == NONE {
+        0.0
+    } else {
+        state.offset.min(depth).max(0.0)
+    };
+    let spring = alpha_n * (depth - offset);
     // the pair's effective mass along the normal, as an impulse moves the
     // gap rate (a massless end moves with nothing: no term), for the
     // estimate
@@ -160,10 +190,10 @@ pub(super) fn respond(
     let slip = inp.dt * (vrel[0] * t[0] + vrel[1] * t[1]);
     let cohesion = if law.cohesion > 0.0 { law.cohesion * cohesive_length(inp, b, f, n, face) } else { 0.0 };
     let (ft, new_gap, work) = friction_update(law, alpha_t, elastic_gap, slip, normal_force, cohesion);
-    *state = ContactState { facet: f, resumed: NONE, elastic_gap: new_gap, depth: -gap };
+    *state = ContactState { facet: f, resumed: NONE, elastic_gap: new_gap, depth, offset };
     acc.contacts += 1;
     acc.friction += work;
-    acc.stored += 0.5 * alpha_n * gap * gap + 0.5 * alpha_t * new_gap * new_gap;
+    acc.stored += 0.5 * alpha_n * (depth - offset) * (depth - offset) + 0.5 * alpha_t * new_gap * new_gap;
     NodeContact {
         facet: f,
         xi,

@@ -220,3 +220,50 @@ impl Format11 {
         Format11 { renumber_every: s.settings.renumber_every }
     }
 }
+
+/// What format 12 added, written after [`Format11`]: the non-zero offsets
+/// of the contact memories ([`ContactState::offset`]: the depth a node
+/// found already inside a facet's element does not count), as (boundary
+/// index, offset) for the first and the second memory per boundary node:
+/// most memories have none, so a file without any grows by two bytes. A
+/// file of an older format restores with none.
+#[derive(Serialize, Deserialize)]
+pub(super) struct Format12 {
+    pub(super) offsets: [Vec<(u32, f64)>; 2],
+}
+
+impl Format12 {
+    pub(super) fn of(s: &Simulation) -> Self {
+        let sparse = |m: &[ContactState]| -> Vec<(u32, f64)> {
+            m.iter().enumerate().filter(|(_, m)| m.offset != 0.0).map(|(b, m)| (b as u32, m.offset)).collect()
+        };
+        let offsets =
+            s.contact.as_ref().map_or_else(Default::default, |c| [sparse(&c.states), sparse(&c.corner_states)]);
+        Format12 { offsets }
+    }
+
+    /// Sets the offsets of the restored memories (after [`Format3`] set
+    /// the second ones); refuses an index past the memories, one given
+    /// twice or out of order, and an offset that is not finite and
+    /// positive.
+    pub(super) fn apply(self, o: &mut StateOwned) -> Result<(), CheckpointError> {
+        let [first, second] = self.offsets;
+        let Some(c) = o.contact.as_mut() else {
+            return if first.is_empty() && second.is_empty() {
+                Ok(())
+            } else {
+                Err(CheckpointError::Invalid("contact offsets in a model without contact".into()))
+            };
+        };
+        for (memories, offsets) in [(&mut c.states, first), (&mut c.corner_states, second)] {
+            let ascending = offsets.windows(2).all(|w| w[0].0 < w[1].0);
+            if !ascending || offsets.iter().any(|&(b, d)| b as usize >= memories.len() || !(d.is_finite() && d > 0.0)) {
+                return Err(CheckpointError::Invalid("the contact offsets do not match the contacts".into()));
+            }
+            for (b, d) in offsets {
+                memories[b as usize].offset = d;
+            }
+        }
+        Ok(())
+    }
+}
