@@ -331,6 +331,32 @@ mod tests {
         (x, surface, broad, node_s, ab, bc)
     }
 
+    /// Runs `f` on the narrow phase's inputs for positions `x`, at rest,
+    /// unit masses, the one interface law `law` and a step of 1e-4 s.
+    fn with_inputs<R>(
+        x: &[Vec2],
+        surface: &Surface,
+        broad: &crate::BroadPhase,
+        law: InterfaceLaw,
+        f: impl FnOnce(&NarrowInputs<'_>) -> R,
+    ) -> R {
+        let laws = [law];
+        let (v, mass) = (vec![[0.0; 2]; x.len()], vec![1.0; x.len()]);
+        let mut frames = vec![FacetFrame::default(); surface.facets.len()];
+        facet_frames(surface, x, &mut frames);
+        f(&NarrowInputs {
+            x,
+            v: &v,
+            mass: &mass,
+            surface,
+            frames: &frames,
+            candidates: &broad.candidates,
+            laws: &laws,
+            resumed: &[],
+            dt: 1e-4,
+        })
+    }
+
     /// One evaluation of the corner case at `x` with the apex node last
     /// touching facet `last` 1 cm deep (deep enough that the "no deeper than
     /// before" rule lets it continue onto the neighbouring facet, so that
@@ -344,26 +370,12 @@ mod tests {
         node_s: usize,
         last: u32,
     ) -> ([Vec<NodeContact>; 2], Vec<ContactPartial>) {
-        let laws = [InterfaceLaw::new(1e9, 1e9, 0.5, 0.0, 0.0).unwrap()];
-        let v = vec![[0.0; 2]; x.len()];
-        let mass = vec![1.0; x.len()];
-        let mut frames = vec![FacetFrame::default(); surface.facets.len()];
-        facet_frames(surface, x, &mut frames);
-        let inp = NarrowInputs {
-            x,
-            v: &v,
-            mass: &mass,
-            surface,
-            frames: &frames,
-            candidates: &broad.candidates,
-            laws: &laws,
-            resumed: &[],
-            dt: 1e-4,
-        };
-        let mut states = vec![ContactState::default(); surface.nodes.len()];
-        states[node_s] = ContactState { facet: last, depth: 0.01, ..Default::default() };
-        assert_ne!(surface.faces[node_s][0], NONE, "the apex is a corner");
-        evaluate_once(&inp, states.clone(), states)
+        with_inputs(x, surface, broad, InterfaceLaw::new(1e9, 1e9, 0.5, 0.0, 0.0).unwrap(), |inp| {
+            let mut states = vec![ContactState::default(); surface.nodes.len()];
+            states[node_s] = ContactState { facet: last, depth: 0.01, ..Default::default() };
+            assert_ne!(surface.faces[node_s][0], NONE, "the apex is a corner");
+            evaluate_once(inp, states.clone(), states)
+        })
     }
 
     /// Two blocks pressed 1 cm into each other along the line y = 0: the
@@ -517,6 +529,43 @@ mod tests {
         assert_eq!(partials.iter().map(|p| p.stored).sum::<f64>(), 0.0);
     }
 
+    /// Body A, the triangle (0,0), (1,0), (0.5,1), and body B, a triangle
+    /// whose apex `apex_s` points up at A's base from B's base, 0.4 m wide
+    /// at y = −0.3 m under it: positions, surface (with apexes), broad phase, the
+    /// boundary index of B's apex and the facet of A's base.
+    fn apex_under_base(apex_s: Vec2) -> (Vec<Vec2>, Surface, crate::BroadPhase, usize, u32) {
+        let [ax, ay] = apex_s;
+        let x: Vec<Vec2> = vec![[0.0, 0.0], [1.0, 0.0], [0.5, 1.0], [ax, ay], [ax - 0.2, -0.3], [ax + 0.2, -0.3]];
+        let facets = [([0, 1], 0), ([1, 2], 0), ([2, 0], 0), ([3, 4], 0), ([4, 5], 0), ([5, 3], 0)];
+        let apex = [x[2], x[0], x[1], x[5], x[3], x[4]];
+        let mut surface = Surface::new(x.len(), &facets, &x, &apex);
+        // each facet's third node: keys are positions in `facets`
+        surface.set_apexes(|key| [2, 0, 1, 5, 3, 4][key as usize]);
+        let mut broad = crate::BroadPhase::new(0.5);
+        broad.build(&surface, &x);
+        let s = surface.index_of[3] as usize;
+        let base = surface.facets.iter().position(|f| f.nodes == [0, 1]).unwrap() as u32;
+        (x, surface, broad, s, base)
+    }
+
+    /// One evaluation of the two bodies at positions `x`, at rest, with
+    /// one law of stiffness `k` (N/m²): the apex's two contacts and the
+    /// energy the springs hold.
+    fn evaluate_apex(
+        x: &[Vec2],
+        surface: &Surface,
+        broad: &crate::BroadPhase,
+        k: f64,
+        states: &mut [ContactState],
+        corner_states: &mut [ContactState],
+        s: usize,
+    ) -> ([NodeContact; 2], f64) {
+        with_inputs(x, surface, broad, InterfaceLaw::new(k, k, 0.0, 0.0, 0.0).unwrap(), |inp| {
+            let ([out, corner_out], partials) = evaluate_in_place(inp, states, corner_states);
+            ([out[s], corner_out[s]], partials.iter().map(|p| p.stored).sum())
+        })
+    }
+
     /// A node found 1 mm inside a facet without having entered it through
     /// its line (no memory, at rest) is taken up where it is: its spring
     /// is offset by that depth, so it starts with no force and no energy.
@@ -529,44 +578,19 @@ mod tests {
     #[test]
     fn a_node_found_inside_is_held_where_it_is_without_energy_from_nothing() {
         let k = 1e9;
+        // B's apex 1 mm up into A's base, then moved as the test says
+        let (x0, surface, broad, s, base) = apex_under_base([0.5, 0.001]);
         let at = |depth: f64| -> Vec<Vec2> {
-            // body A above the facet (0,0)→(1,0); body B's apex pokes up into it
-            vec![[0.0, 0.0], [1.0, 0.0], [0.5, 1.0], [0.5, depth], [0.3, -0.3], [0.7, -0.3]]
+            let mut x = x0.clone();
+            x[3] = [0.5, depth];
+            x
         };
-        let facets = [([0, 1], 0), ([1, 2], 0), ([2, 0], 0), ([3, 4], 0), ([4, 5], 0), ([5, 3], 0)];
-        let x0 = at(0.001);
-        let apex = [x0[2], x0[0], x0[1], x0[5], x0[3], x0[4]];
-        let mut surface = Surface::new(x0.len(), &facets, &x0, &apex);
-        // each facet's third node: keys are positions in `facets`
-        surface.set_apexes(|key| [2, 0, 1, 5, 3, 4][key as usize]);
-        let mut broad = crate::BroadPhase::new(0.5);
-        broad.build(&surface, &x0);
-        let s = surface.index_of[3] as usize;
-        let base = surface.facets.iter().position(|f| f.nodes == [0, 1]).unwrap() as u32;
-        let laws = [InterfaceLaw::new(k, k, 0.0, 0.0, 0.0).unwrap()];
-        let (v, mass) = (vec![[0.0; 2]; x0.len()], vec![1.0; x0.len()]);
         let nb = surface.nodes.len();
         let (mut states, mut corner_states) = (vec![ContactState::default(); nb], vec![ContactState::default(); nb]);
-        let mut frames = vec![FacetFrame::default(); surface.facets.len()];
         let mut step = |depth: f64| {
-            let x = at(depth);
-            facet_frames(&surface, &x, &mut frames);
-            let inp = NarrowInputs {
-                x: &x,
-                v: &v,
-                mass: &mass,
-                surface: &surface,
-                frames: &frames,
-                candidates: &broad.candidates,
-                laws: &laws,
-                resumed: &[],
-                dt: 1e-4,
-            };
-            let ([out, corner_out], partials) = evaluate_in_place(&inp, &mut states, &mut corner_states);
-            let contacts = [out[s], corner_out[s]];
+            let (contacts, stored) = evaluate_apex(&at(depth), &surface, &broad, k, &mut states, &mut corner_states, s);
             assert!(contacts.iter().all(|c| c.facet == base), "{contacts:?}");
             let force: f64 = contacts.iter().map(|c| c.normal_force).sum();
-            let stored: f64 = partials.iter().map(|p| p.stored).sum();
             (force, stored, [states[s].offset, corner_states[s].offset])
         };
         let (force, stored, offsets) = step(0.001);
@@ -598,37 +622,13 @@ mod tests {
     #[test]
     fn a_node_is_found_inside_a_facet_only_where_it_lies_in_its_body_through_it() {
         let held = |apex_s: Vec2| -> bool {
-            let [ax, ay] = apex_s;
-            let x: Vec<Vec2> = vec![[0.0, 0.0], [1.0, 0.0], [0.5, 1.0], [ax, ay], [ax - 0.2, -0.3], [ax + 0.2, -0.3]];
-            let facets = [([0, 1], 0), ([1, 2], 0), ([2, 0], 0), ([3, 4], 0), ([4, 5], 0), ([5, 3], 0)];
-            let apex = [x[2], x[0], x[1], x[5], x[3], x[4]];
-            let mut surface = Surface::new(x.len(), &facets, &x, &apex);
-            surface.set_apexes(|key| [2, 0, 1, 5, 3, 4][key as usize]);
-            let mut broad = crate::BroadPhase::new(0.5);
-            broad.build(&surface, &x);
-            let s = surface.index_of[3] as usize;
-            let base = surface.facets.iter().position(|f| f.nodes == [0, 1]).unwrap() as u32;
+            let (x, surface, broad, s, base) = apex_under_base(apex_s);
             assert!(broad.candidates.row(s).contains(&base), "the base facet is a candidate");
-            let laws = [InterfaceLaw::new(1e9, 1e9, 0.0, 0.0, 0.0).unwrap()];
-            let (v, mass) = (vec![[0.0; 2]; x.len()], vec![1.0; x.len()]);
             let nb = surface.nodes.len();
             let (mut states, mut corner_states) =
                 (vec![ContactState::default(); nb], vec![ContactState::default(); nb]);
-            let mut frames = vec![FacetFrame::default(); surface.facets.len()];
-            facet_frames(&surface, &x, &mut frames);
-            let inp = NarrowInputs {
-                x: &x,
-                v: &v,
-                mass: &mass,
-                surface: &surface,
-                frames: &frames,
-                candidates: &broad.candidates,
-                laws: &laws,
-                resumed: &[],
-                dt: 1e-4,
-            };
-            let ([out, corner_out], _) = evaluate_in_place(&inp, &mut states, &mut corner_states);
-            [out[s], corner_out[s]].iter().any(|c| c.facet == base)
+            let (contacts, _) = evaluate_apex(&x, &surface, &broad, 1e9, &mut states, &mut corner_states, s);
+            contacts.iter().any(|c| c.facet == base)
         };
         assert!(held([0.5, 0.005]), "well inside A, 5 mm behind its base");
         assert!(!held([0.001, 0.005]), "beside A's side");
