@@ -219,11 +219,12 @@ def test_quick_caving_leaves_no_piece_inside_another(quick_caving):
     1% of the mean element size `h` (√(2A) averaged, 3.1 m). Contact
     penetrations under the overburden stay far below that. At the end of
     the demo (0.8 s, 2-core Zen 3 VM, 2026-11-27) 6 nodes without contact
-    lie deeper, the deepest 8 cm: deeper than contact looks for a node
-    found inside a facet (1% of its length, docs/contact.md, item 7), or
-    nearer another side of the element. Before contact took up nodes
-    found inside, 80 did, the deepest 0.41 m. An expected failure until
-    the way those nodes get in is traced and closed."""
+    lie deeper, the deepest 8 cm: four have no face that opposes the
+    facet they lie behind (docs/contact.md, items 1 and 7), one lies
+    nearest a facet it does not face, one deeper than item 7 looks. Before
+    contact took up nodes found inside, 80 did, the deepest 0.41 m. An
+    expected failure until the way those nodes get in is traced and
+    closed."""
     _, summary = quick_caving
     sim = summary["simulation"]
     h = float(np.sqrt(2.0 * sim.areas()[sim.active()]).mean())
