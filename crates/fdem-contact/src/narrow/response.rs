@@ -95,7 +95,11 @@ fn share(inp: &NarrowInputs<'_>, b: usize, node: usize, n: Vec2, face: Option<u3
 
 /// The energy held in contact `c`'s springs (J/m), boundary node `b`
 /// bearing with `face` (as in [`respond`]) and memory `state`:
-/// `½ α_n (−g − offset)² + ½ α_t g_tᵉ²` as [`respond`] counts it.
+/// `½ α_n (−g − offset)² + ½ α_t g_tᵉ²` as [`respond`] counts it. `α_n`
+/// is read back from the spring's force `f_s = α_n (−g − offset)` and
+/// `α_t = α_n k_t / k_n` (both springs share the node's tributary length);
+/// only a spring the offset leaves unloaded, which has no force to read
+/// it from, works its share out again.
 #[inline]
 pub(super) fn held_energy(
     inp: &NarrowInputs<'_>,
@@ -105,11 +109,17 @@ pub(super) fn held_energy(
     state: &ContactState,
 ) -> f64 {
     let law = &inp.laws[inp.surface.facets[c.facet as usize].law as usize];
-    let node = inp.surface.nodes[b] as usize;
-    let (trib, _) = share(inp, b, node, inp.frames[c.facet as usize].normal(), face);
     let loaded = (-c.gap - state.offset).max(0.0);
-    0.5 * law.normal_stiffness * trib * loaded * loaded
-        + 0.5 * law.shear_stiffness * trib * state.elastic_gap * state.elastic_gap
+    let alpha_n = if loaded > 0.0 {
+        c.dashpot.spring / loaded
+    } else if state.elastic_gap != 0.0 {
+        let node = inp.surface.nodes[b] as usize;
+        law.normal_stiffness * share(inp, b, node, inp.frames[c.facet as usize].normal(), face).0
+    } else {
+        return 0.0;
+    };
+    let alpha_t = alpha_n * (law.shear_stiffness / law.normal_stiffness);
+    0.5 * c.dashpot.spring * loaded + 0.5 * alpha_t * state.elastic_gap * state.elastic_gap
 }
 
 /// The spring (m of penetration) a node found inside a facet keeps from
