@@ -4,7 +4,9 @@
 //! size: steps of a contacting, yielding run with the broad phase rebuilt
 //! every few steps (fracture off), steps with fracture checks that
 //! insert nothing, and steps whose bonds (young cracks) neither grow nor
-//! break; on 1 and 2 threads, none of fdem's.
+//! break; on 1 and 2 threads, none of fdem's. A check whose candidates
+//! cannot separate plans them and inserts nothing: its planning is
+//! watched by itself too.
 //!
 //! rayon's scheduler allocates now and then on more than one thread (the
 //! garbage bags of crossbeam-epoch, under its work-stealing deques): an
@@ -98,6 +100,45 @@ fn steps_without_topology_changes_allocate_nothing() {
     contacting_yielding_steps();
     fracture_checks_that_insert_nothing();
     steps_with_bonds_that_keep_their_count();
+    planning_that_separates_nothing();
+}
+
+fn planning_that_separates_nothing() {
+    use fdem_fracture::{plan_with, FractureParams, NodeFailure, PlanScratch};
+    // 3 × 3 unit cells, node (i, j) = 4j + i, cracks vertical (σ1 along
+    // x): node 0, a corner, has its crack along the boundary and out of
+    // the material (nothing to cut), node 5 is next to a crack at node 6
+    // (a fresh crack does not start there). A fragmented impact's checks
+    // re-plan a couple of hundred such candidates each.
+    let x: Vec<[f64; 2]> = (0..16).map(|k| [(k % 4) as f64, (k / 4) as f64]).collect();
+    let mut t = Vec::new();
+    for j in 0..3u32 {
+        for i in 0..3u32 {
+            let (a, b, c, d) = (4 * j + i, 4 * j + i + 1, 4 * j + i + 5, 4 * j + i + 4);
+            t.extend([[a, b, c], [a, c, d]]);
+        }
+    }
+    let csr = fdem_mesh::node_elements(x.len(), &t);
+    let active = vec![true; t.len()];
+    let normal = vec![0.0; x.len()];
+    let mut cracked = vec![false; x.len()];
+    cracked[6] = true;
+    let failure = NodeFailure { normal: &normal, cracked: &cracked };
+    let params = FractureParams::default();
+    let mut scratch = PlanScratch::default();
+    for round in 0..3 {
+        OURS.store(0, Ordering::Relaxed);
+        WATCH.store(true, Ordering::Relaxed);
+        let edits = plan_with(&mut scratch, &t, &active, &csr, &x, &[0, 5], &failure, &params);
+        WATCH.store(false, Ordering::Relaxed);
+        let ours = OURS.load(Ordering::Relaxed);
+        assert!(edits.inserted_at.is_empty() && edits.waiting.is_empty(), "round {round}");
+        // the first round sizes the scratch
+        if round > 0 {
+            let first = FIRST.lock().unwrap_or_else(|e| e.into_inner()).clone();
+            assert_eq!(ours, 0, "{ours} allocations planning what cannot separate; the first:\n{first}");
+        }
+    }
 }
 
 fn contacting_yielding_steps() {

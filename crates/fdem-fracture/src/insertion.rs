@@ -33,6 +33,7 @@
 
 use fdem_mesh::Csr;
 use rayon::prelude::*;
+use smallvec::SmallVec;
 
 use crate::Vec2;
 
@@ -199,12 +200,38 @@ pub fn plan(
     nodes: &NodeFailure<'_>,
     params: &FractureParams,
 ) -> Edits {
+    plan_with(&mut PlanScratch::default(), conn, active, node_elems, x, candidates, nodes, params)
+}
+
+/// The buffers [`plan_with`] keeps from check to check: a check that
+/// inserts nothing (its candidates all wait, or none can separate) then
+/// allocates nothing, as the time loop must not (a fragmented impact's
+/// checks re-plan a couple of hundred such candidates each).
+#[derive(Default)]
+pub struct PlanScratch {
+    proposals: Vec<Option<Proposal>>,
+    claimed: Vec<bool>,
+}
+
+/// [`plan`] with the buffers of `scratch`; the same edits.
+#[allow(clippy::too_many_arguments)]
+pub fn plan_with(
+    scratch: &mut PlanScratch,
+    conn: &[[u32; 3]],
+    active: &[bool],
+    node_elems: &Csr,
+    x: &[Vec2],
+    candidates: &[u32],
+    nodes: &NodeFailure<'_>,
+    params: &FractureParams,
+) -> Edits {
     let check = Check { conn, active, node_elems, x, nodes: *nodes, params };
-    let proposals: Vec<Option<Proposal>> =
-        candidates.par_iter().with_min_len(8).map(|&p| plan_one(&check, p, |_| false)).collect();
+    let PlanScratch { proposals, claimed } = scratch;
+    candidates.par_iter().with_min_len(8).map(|&p| plan_one(&check, p, |_| false)).collect_into_vec(proposals);
     let mut edits = Edits::default();
-    let mut claimed = vec![false; conn.len()];
-    for (&p, proposal) in candidates.iter().zip(proposals) {
+    claimed.clear();
+    claimed.resize(conn.len(), false);
+    for (&p, proposal) in candidates.iter().zip(proposals.drain(..)) {
         let Some(mut proposal) = proposal else { continue };
         if proposal.star.iter().any(|&e| claimed[e as usize]) {
             edits.waiting.push(p);
@@ -214,7 +241,7 @@ pub fn plan(
             proposal = plan_one(&check, p, |n| claimed[n as usize]).expect("the star is the same");
         }
         if let Some(insertion) = proposal.insertion {
-            insertion.commit(p, &mut edits, &mut claimed, x.len() as u32);
+            insertion.commit(p, &mut edits, claimed, x.len() as u32);
         }
     }
     edits
@@ -261,7 +288,7 @@ struct Check<'a> {
 impl Check<'_> {
     /// The active elements around `p` as `(element, q, r)`, `(p, q, r)`
     /// counter-clockwise.
-    fn star_of(&self, p: u32) -> Vec<(u32, u32, u32)> {
+    fn star_of(&self, p: u32) -> SmallVec<[(u32, u32, u32); STAR]> {
         self.node_elems
             .row(p as usize)
             .iter()
@@ -284,13 +311,18 @@ impl Check<'_> {
     }
 }
 
+/// The elements round a node that a plan keeps without allocating: a
+/// node of a triangulation has about six, a fragmented one rarely more
+/// than twelve (more spill to the heap, as a `Vec` would).
+const STAR: usize = 16;
+
 /// One candidate as planned on the mesh at the check.
 struct Proposal {
     /// The elements of its star: it waits if an earlier insertion claimed one.
-    star: Vec<u32>,
+    star: SmallVec<[u32; STAR]>,
     /// The split neighbours whose claims the plan read: planned again if an
-    /// earlier insertion claimed one.
-    read: Vec<u32>,
+    /// earlier insertion claimed one (one per direction).
+    read: SmallVec<[u32; 2]>,
     /// The insertion, if the node separates.
     insertion: Option<Insertion>,
 }
@@ -338,10 +370,11 @@ fn plan_one(check: &Check<'_>, p: u32, claimed: impl Fn(u32) -> bool) -> Option<
     if star.is_empty() {
         return None;
     }
-    let mut proposal = Proposal { star: star.iter().map(|&(e, ..)| e).collect(), read: Vec::new(), insertion: None };
+    let mut proposal =
+        Proposal { star: star.iter().map(|&(e, ..)| e).collect(), read: SmallVec::new(), insertion: None };
     let xp = x[p as usize];
     // edges at p and how many star elements hold each (1: a face)
-    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(2 * star.len());
+    let mut edges: SmallVec<[(u32, u32); 2 * STAR]> = SmallVec::new();
     for &(_, q, r) in &star {
         for w in [q, r] {
             match edges.iter_mut().find(|(v, _)| *v == w) {
@@ -361,9 +394,9 @@ fn plan_one(check: &Check<'_>, p: u32, claimed: impl Fn(u32) -> bool) -> Option<
     }
     let th = normal[p as usize];
     let c = [-th.sin(), th.cos()];
-    let mut cuts: Vec<Cut> = Vec::with_capacity(2);
+    let mut cuts: SmallVec<[Cut; 2]> = SmallVec::new();
     // the split neighbours whose claims were read
-    let mut read = Vec::new();
+    let mut read = SmallVec::new();
     for d in [c, [-c[0], -c[1]]] {
         // already cracked (or the boundary) in this direction?
         if edges.iter().any(|&(w, k)| k == 1 && angle(d, sub(x[w as usize], xp)) < params.crack_tolerance) {
@@ -431,12 +464,13 @@ fn plan_one(check: &Check<'_>, p: u32, claimed: impl Fn(u32) -> bool) -> Option<
     // the star after the planned splits: (provisional id, nodes)
     let mut next_node = n_nodes;
     let mut next_elem = n_elements;
-    let mut local: Vec<(u32, [u32; 3])> = star.iter().map(|&(e, q, r)| (e, [p, q, r])).collect();
-    let mut outside: Vec<(u32, [u32; 3])> = Vec::new(); // split neighbours' children (no p)
-    let mut new_nodes = Vec::new();
-    let mut cut_to: Vec<u32> = Vec::new();
-    let mut added = Vec::new();
-    let mut split_edges = Vec::new();
+    // (inline: a candidate that cannot separate allocates nothing)
+    let mut local: SmallVec<[(u32, [u32; 3]); STAR + 2]> = star.iter().map(|&(e, q, r)| (e, [p, q, r])).collect();
+    let mut outside: SmallVec<[(u32, [u32; 3]); 2]> = SmallVec::new(); // split neighbours' children (no p)
+    let mut new_nodes: SmallVec<[NewNode; 4]> = SmallVec::new();
+    let mut cut_to: SmallVec<[u32; 2]> = SmallVec::new();
+    let mut added: SmallVec<[(u32, [u32; 3]); 4]> = SmallVec::new();
+    let mut split_edges: SmallVec<[([u32; 2], u32); 2]> = SmallVec::new();
     for cut in &cuts {
         match *cut {
             Cut::Edge(w) => cut_to.push(w),
@@ -465,7 +499,7 @@ fn plan_one(check: &Check<'_>, p: u32, claimed: impl Fn(u32) -> bool) -> Option<
     }
     // sectors of p's star: joined across shared, uncut edges (p, w)
     let k = local.len();
-    let mut parent: Vec<usize> = (0..k).collect();
+    let mut parent: SmallVec<[usize; STAR + 2]> = (0..k).collect();
     fn find(parent: &mut [usize], mut i: usize) -> usize {
         while parent[i] != i {
             parent[i] = parent[parent[i]];
@@ -486,8 +520,8 @@ fn plan_one(check: &Check<'_>, p: u32, claimed: impl Fn(u32) -> bool) -> Option<
             }
         }
     }
-    let mut roots: Vec<usize> = Vec::new();
-    let mut order: Vec<(u32, usize)> = (0..k).map(|i| (local[i].0, i)).collect();
+    let mut roots: SmallVec<[usize; 4]> = SmallVec::new();
+    let mut order: SmallVec<[(u32, usize); STAR + 2]> = (0..k).map(|i| (local[i].0, i)).collect();
     order.sort_unstable();
     for &(_, i) in &order {
         let r = find(&mut parent, i);
@@ -500,7 +534,7 @@ fn plan_one(check: &Check<'_>, p: u32, claimed: impl Fn(u32) -> bool) -> Option<
         return Some(proposal); // nothing separates: leave the node for a later check
     }
     // the insertion: its claims, its splits, p duplicated per extra sector
-    let mut claims = proposal.star.clone();
+    let mut claims = proposal.star.to_vec();
     claims.extend(cuts.iter().filter_map(|cut| match *cut {
         Cut::Split { n: Some(n), .. } => Some(n),
         _ => None,
@@ -508,7 +542,7 @@ fn plan_one(check: &Check<'_>, p: u32, claimed: impl Fn(u32) -> bool) -> Option<
     let copy_ids: Vec<u32> = (1..roots.len()).map(|s| next_node + s as u32 - 1).collect();
     new_nodes.extend((1..roots.len()).map(|_| NewNode::Copy { of: p }));
     let mut changed = Vec::with_capacity(k + outside.len());
-    let copy_for = |i: usize, parent: &mut Vec<usize>| -> u32 {
+    let copy_for = |i: usize, parent: &mut [usize]| -> u32 {
         let r = find(parent, i);
         let s = roots.iter().position(|&x| x == r).unwrap_or(0);
         if s == 0 {
@@ -538,7 +572,14 @@ fn plan_one(check: &Check<'_>, p: u32, claimed: impl Fn(u32) -> bool) -> Option<
     }
     changed.extend(outside);
     let crack_faces = cut_to.iter().map(|&w| [p, w]).collect();
-    proposal.insertion = Some(Insertion { claims, new_nodes, split_edges, changed, added, crack_faces });
+    proposal.insertion = Some(Insertion {
+        claims,
+        new_nodes: new_nodes.into_vec(),
+        split_edges: split_edges.into_vec(),
+        changed,
+        added: added.into_vec(),
+        crack_faces,
+    });
     Some(proposal)
 }
 

@@ -10,7 +10,8 @@ use fdem_contact::{Bond, MixedMode};
 use fdem_element::kinematics::{deformation_gradient, polar_rotation, reference_inverse, signed_area};
 use fdem_element::{ReferenceShape, Vec2};
 use fdem_fracture::{
-    direction_angle, doubled_direction, nodal_failure, plan, Edits, FractureParams, NewNode, NodeFailure,
+    direction_angle, doubled_direction, nodal_failure, plan_with, Edits, FractureParams, NewNode, NodeFailure,
+    PlanScratch,
 };
 use rayon::prelude::*;
 
@@ -52,7 +53,7 @@ pub(crate) struct FractureModel {
     #[serde(skip)]
     node_direction: Vec<[f64; 2]>,
     /// Per node: the crack normal's angle (rad), worked out for the
-    /// candidates of the last check only (what [`plan`] reads).
+    /// candidates of the last check only (what [`plan_with`] reads).
     #[serde(skip)]
     node_angle: Vec<f64>,
     #[serde(skip)]
@@ -72,6 +73,10 @@ pub(crate) struct FractureModel {
     /// parallel, then listed in node order).
     #[serde(skip)]
     candidate_flags: Vec<u8>,
+    /// Scratch: the planner's buffers, so that a check that inserts
+    /// nothing allocates nothing.
+    #[serde(skip)]
+    plan_scratch: PlanScratch,
     /// Scratch: the bond list's other buffer. An insertion check builds the
     /// new list in it and swaps the two, so that neither is allocated
     /// afresh (page faults, serial) nor grown by a copy when the check's new
@@ -111,6 +116,7 @@ impl FractureModel {
             factor_seen: Vec::new(),
             candidates: Vec::new(),
             candidate_flags: Vec::new(),
+            plan_scratch: PlanScratch::default(),
             bonds_spare: Vec::new(),
             bond_responses: Vec::new(),
             bond_chunk_sums: Vec::new(),
@@ -273,7 +279,8 @@ impl Simulation {
             candidates.par_sort_unstable_by(|&a, &b| {
                 fr.node_factor[b as usize].total_cmp(&fr.node_factor[a as usize]).then(id(a).cmp(&id(b)))
             });
-            edits = plan(
+            edits = plan_with(
+                &mut fr.plan_scratch,
                 &self.elems.conn,
                 &self.elems.active,
                 &self.node_elems,
