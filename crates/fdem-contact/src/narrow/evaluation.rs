@@ -221,7 +221,7 @@ fn evaluate_node(
     for k in 0..slots {
         let face = (slots == 2).then(|| faces[k]);
         match best[k] {
-            Some((r, f, xi, gap, _)) => {
+            Some((r, f, xi, gap, ..)) => {
                 let best = (r, f, xi, gap);
                 *out[k] = respond(inp, b, node, &mut *states[k], best, face, acc);
                 busy |= 1 << k;

@@ -6,8 +6,9 @@
 //! ([`rank`]); only facets that face the node's bearing face count, and
 //! among equal ranks the shallower penetration wins.
 
-use super::projection::{corner_gap, node_normal, projects_inside};
+use super::projection::{corner_gap, node_normal, projects_inside, XI_SLACK};
 use super::{ContactPartial, ContactState, NarrowInputs};
+use crate::surface::MANY;
 use crate::{Vec2, NONE, SMOOTH_COS};
 
 /// Relative slack on the depth a contact that moves to another facet (or
@@ -148,8 +149,46 @@ pub(super) fn resumed_direction(inp: &NarrowInputs<'_>, old: u32) -> Vec2 {
     [pb[0] - pa[0], pb[1] - pa[1]]
 }
 
-/// Per contact: (rank, facet, ξ, gap, facing) of the best candidate so far.
-pub(super) type Best = Option<(u8, u32, f64, f64, f64)>;
+/// Per contact: (rank, facet, ξ, gap, facing, along) of the best candidate
+/// so far; `along` is [`lies_along`].
+pub(super) type Best = Option<(u8, u32, f64, f64, f64, bool)>;
+
+/// Whether candidate `c` lies along face `face` of a corner node `node`
+/// (a facet of the node's own body that starts or ends at it), rather than
+/// meeting the face only at the candidate's end, where the other body has a
+/// corner (the candidate runs away from the face beyond the node's
+/// projection, within the slack `XI_SLACK`, and its surface turns by 30° or
+/// more there or stops). At a junction of joints four blocks meet at a
+/// point: a corner's face is opposed along its whole length by the block
+/// across the joint, and at its end only by the corner of the block
+/// diagonally across. The diagonal block's facet is often the shallower
+/// penetration, and a face that took it left the block across the joint
+/// unopposed: two blocks of the demo passed 7.6 cm into each other that
+/// way (docs/contact.md, "Which facet a node touches", item 8).
+#[inline]
+fn lies_along(inp: &NarrowInputs<'_>, face: u32, node: usize, c: &Candidate) -> bool {
+    let [p, q] = inp.surface.facets[face as usize].nodes;
+    let other = if p as usize == node { q } else { p };
+    let (s, o) = (inp.x[node], inp.x[other as usize]);
+    let t = [o[0] - s[0], o[1] - s[1]];
+    let d = inp.frames[c.f as usize].t;
+    // which end of the candidate the face runs towards, and the share of
+    // the candidate between the node's projection and that end
+    let at_end = d[0] * t[0] + d[1] * t[1] >= 0.0;
+    let beyond = if at_end { 1.0 - c.xi } else { c.xi };
+    if beyond > XI_SLACK {
+        return true;
+    }
+    // the other body's surface past that end: along the face if it goes on
+    // smoothly
+    match inp.surface.links[c.f as usize][usize::from(at_end)] {
+        NONE | MANY => false,
+        k => {
+            let e = inp.frames[k as usize].t;
+            d[0] * e[0] + d[1] * e[1] >= SMOOTH_COS
+        }
+    }
+}
 
 /// The candidate search of one boundary node: what every candidate test
 /// reads, and the search's running state.
@@ -196,7 +235,9 @@ impl<'i, 'a> Search<'i, 'a> {
             if f != NONE && row.binary_search(&f).is_ok() {
                 self.consider(f, [k == 0, k == 1], states, acc);
             }
-            open[k] = !matches!(self.best[k], Some((0, ..)));
+            // (a corner's facet that meets its face only at the facet's
+            // end may yield to one along the face: `lies_along`)
+            open[k] = !matches!(self.best[k], Some((0, .., true)));
         }
         if open.iter().any(|&o| o) {
             if row.len() > 64 {
@@ -294,14 +335,18 @@ impl<'i, 'a> Search<'i, 'a> {
             }
             let gap = c.gap;
             let Some(r) = rank(inp, self.node, &*states[k], &c) else { continue };
-            // equal ranks: the shallower penetration; an exact tie (a node
-            // at the vertex two facets share) goes to the facet that faces
-            // the node's face more squarely, so the choice is geometric,
-            // not by facet index, and does not depend on the numbering
-            if self.best[k]
-                .is_none_or(|(rb, _, _, g, fb)| r < rb || (r == rb && (gap > g || (gap == g && facing < fb))))
-            {
-                self.best[k] = Some((r, f, xi, gap, facing));
+            // at a corner a facet along the face comes first, whatever its
+            // rank (`lies_along`); then the lower rank; equal ranks: the
+            // shallower penetration; an exact tie (a node at the vertex two
+            // facets share) goes to the facet that faces the node's face
+            // more squarely, so the choice is geometric, not by facet
+            // index, and does not depend on the numbering
+            let along = slots == 1 || lies_along(inp, faces[k], self.node, &c);
+            let key = (!along, r);
+            if self.best[k].is_none_or(|(rb, _, _, g, fb, ab)| {
+                key < (!ab, rb) || (key == (!ab, rb) && (gap > g || (gap == g && facing < fb)))
+            }) {
+                self.best[k] = Some((r, f, xi, gap, facing, along));
             }
         }
     }
@@ -396,18 +441,26 @@ mod tests {
             .map(|&x| [x + 0.25 + shift, -0.01])
             .chain([[4.25 + shift, 1.0], [0.25 + shift, 1.0]])
             .collect();
-        let x: Vec<Vec2> = lower.iter().copied().chain(upper.iter().copied()).collect();
-        // each block a counter-clockwise ring (body on the left), the
-        // apex of every facet the block's centroid
+        blocks(&[&lower, &upper])
+    }
+
+    /// Blocks, each a counter-clockwise ring of positions (body on the
+    /// left): the positions in ring order, the surface (the apex of every
+    /// facet its block's centroid) and the broad phase built at them.
+    fn blocks(rings: &[&[Vec2]]) -> (Vec<Vec2>, Surface, crate::BroadPhase) {
+        let x: Vec<Vec2> = rings.iter().flat_map(|r| r.iter().copied()).collect();
         let mut facets = Vec::new();
         let mut apex = Vec::new();
-        for (first, n) in [(0u32, 7u32), (7, 7)] {
-            let ids: Vec<u32> = (first..first + n).collect();
-            let c = ids.iter().fold([0.0; 2], |c, &i| [c[0] + x[i as usize][0] / 7.0, c[1] + x[i as usize][1] / 7.0]);
-            for k in 0..ids.len() {
-                facets.push(([ids[k], ids[(k + 1) % ids.len()]], 0));
+        let mut first = 0u32;
+        for ring in rings {
+            let n = ring.len() as u32;
+            let w = 1.0 / f64::from(n);
+            let c = ring.iter().fold([0.0; 2], |c, p| [c[0] + p[0] * w, c[1] + p[1] * w]);
+            for k in 0..n {
+                facets.push(([first + k, first + (k + 1) % n], 0));
                 apex.push(c);
             }
+            first += n;
         }
         let surface = Surface::new(x.len(), &facets, &x, &apex);
         let mut broad = crate::BroadPhase::new(0.5);
@@ -686,5 +739,41 @@ mod tests {
         assert!(!held([0.001, 0.005]), "beside A's side");
         assert!(!held([0.004, 0.005]), "nearer A's side than its base");
         assert!(!held([0.5, 0.02]), "deeper than FOUND_INSIDE_DEPTH");
+    }
+
+    /// Item 8 of docs/contact.md: at a junction of joints a block's corner
+    /// face bears on the block across the joint, which lies along it, not
+    /// on the block diagonally across, whose corner it meets only at that
+    /// facet's end, even where that one is the shallower penetration. Four
+    /// unit blocks meet at the origin; the upper right one's corner,
+    /// moving left, has gone 0.5 mm into the lower left block's side at its
+    /// top end and 1.5 mm into the upper left block's side, whose corner
+    /// lies 2 mm lower. Taking the shallower one left the upper two blocks
+    /// to pass into each other (7.6 cm in the demo).
+    #[test]
+    fn a_corner_bears_on_the_face_along_it_not_on_a_corner_it_meets() {
+        let upper_left: [Vec2; 4] = [[-1.0, -0.002], [0.001, -0.002], [0.001, 1.0], [-1.0, 1.0]];
+        let lower_left: [Vec2; 4] = [[-1.0, -1.0], [0.0, -1.0], [0.0, 0.0], [-1.0, 0.0]];
+        let corner = [-0.0005, -0.0005];
+        let upper_right: [Vec2; 4] = [corner, [1.0, -0.0005], [1.0, 1.0], [-0.0005, 1.0]];
+        let (x, surface, broad) = blocks(&[&upper_left, &lower_left, &upper_right]);
+        let facet = |a: Vec2, b: Vec2| {
+            let at = |p: Vec2| x.iter().position(|&q| q == p).unwrap() as u32;
+            surface.facets.iter().position(|f| f.nodes == [at(a), at(b)]).unwrap() as u32
+        };
+        let (across, diagonal) = (facet([0.001, -0.002], [0.001, 1.0]), facet([0.0, -1.0], [0.0, 0.0]));
+        let node = 8; // the upper right block's corner
+        let b = surface.index_of[node] as usize;
+        let left_face = facet([-0.0005, 1.0], corner);
+        assert_eq!(surface.faces[b][0], left_face, "a corner; its first face the left one");
+        // moving left at 20 m/s: both depths entered within the step
+        let law = InterfaceLaw::new(1e9, 1e9, 0.5, 0.0, 0.0).unwrap();
+        let found = with_inputs(&x, &surface, &broad, law, Some((node, [-20.0, 0.0])), |inp| {
+            let none = vec![ContactState::default(); surface.nodes.len()];
+            let (out, _) = evaluate_once(inp, none.clone(), none);
+            (out[0][b].facet, out[0][b].gap)
+        });
+        assert_eq!(found.0, across, "the left face bears on the block across the joint, not {diagonal}");
+        assert!((found.1 + 0.0015).abs() < 1e-12, "at its depth there: {}", found.1);
     }
 }
