@@ -3,8 +3,10 @@
 //! touched last step while that still qualifies, slides on to the next
 //! facet along a smooth surface, resumes after a topology change, or
 //! starts on a facet it entered through the facet's line within this step
-//! ([`rank`]); only facets that face the node's bearing face count, and
-//! among equal ranks the shallower penetration wins.
+//! ([`rank`]); only facets that face the node's bearing face count; at a
+//! corner a facet along the face comes before one that meets it only at
+//! its end ([`lies_along`]); and among equal ranks the shallower
+//! penetration wins.
 
 use super::projection::{corner_gap, node_normal, projects_inside, XI_SLACK};
 use super::{ContactPartial, ContactState, NarrowInputs};
