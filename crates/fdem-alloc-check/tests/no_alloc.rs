@@ -104,7 +104,7 @@ fn steps_without_topology_changes_allocate_nothing() {
 }
 
 fn planning_that_separates_nothing() {
-    use fdem_fracture::{plan_with, FractureParams, NodeFailure, PlanScratch};
+    use fdem_fracture::{plan, FractureParams, NodeFailure, PlanScratch};
     // 3 × 3 unit cells, node (i, j) = 4j + i, cracks vertical (σ1 along
     // x): node 0, a corner, has its crack along the boundary and out of
     // the material (nothing to cut), node 5 is next to a crack at node 6
@@ -129,7 +129,7 @@ fn planning_that_separates_nothing() {
     for round in 0..3 {
         OURS.store(0, Ordering::Relaxed);
         WATCH.store(true, Ordering::Relaxed);
-        let edits = plan_with(&mut scratch, &t, &active, &csr, &x, &[0, 5], &failure, &params);
+        let edits = plan(&mut scratch, &t, &active, &csr, &x, &[0, 5], &failure, &params);
         WATCH.store(false, Ordering::Relaxed);
         let ours = OURS.load(Ordering::Relaxed);
         assert!(edits.inserted_at.is_empty() && edits.waiting.is_empty(), "round {round}");

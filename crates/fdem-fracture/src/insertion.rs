@@ -192,30 +192,6 @@ pub struct NodeFailure<'a> {
 /// run at one thread, all of it serial.)
 #[allow(clippy::too_many_arguments)]
 pub fn plan(
-    conn: &[[u32; 3]],
-    active: &[bool],
-    node_elems: &Csr,
-    x: &[Vec2],
-    candidates: &[u32],
-    nodes: &NodeFailure<'_>,
-    params: &FractureParams,
-) -> Edits {
-    plan_with(&mut PlanScratch::default(), conn, active, node_elems, x, candidates, nodes, params)
-}
-
-/// The buffers [`plan_with`] keeps from check to check: a check that
-/// inserts nothing (its candidates all wait, or none can separate) then
-/// allocates nothing, as the time loop must not (a fragmented impact's
-/// checks re-plan a couple of hundred such candidates each).
-#[derive(Default)]
-pub struct PlanScratch {
-    proposals: Vec<Option<Proposal>>,
-    claimed: Vec<bool>,
-}
-
-/// [`plan`] with the buffers of `scratch`; the same edits.
-#[allow(clippy::too_many_arguments)]
-pub fn plan_with(
     scratch: &mut PlanScratch,
     conn: &[[u32; 3]],
     active: &[bool],
@@ -245,6 +221,16 @@ pub fn plan_with(
         }
     }
     edits
+}
+
+/// The buffers [`plan`] keeps from check to check: a check that inserts
+/// nothing (its candidates all wait, or none can separate) then allocates
+/// nothing, as the time loop must not (a fragmented impact's checks
+/// re-plan a couple of hundred such candidates each).
+#[derive(Default)]
+pub struct PlanScratch {
+    proposals: Vec<Option<Proposal>>,
+    claimed: Vec<bool>,
 }
 
 /// [`plan`] one candidate at a time, in order, each planned with the claims
@@ -650,7 +636,8 @@ mod tests {
         let active = vec![true; t.len()];
         let mut normal = vec![0.0; x.len()];
         normal[5] = 0.0; // σ1 along x: the crack runs vertically through (1, 1)
-        let e = plan(&t, &active, &csr, &x, &[5], &nodes(&normal), &FractureParams::default());
+        let e =
+            plan(&mut PlanScratch::default(), &t, &active, &csr, &x, &[5], &nodes(&normal), &FractureParams::default());
         assert_eq!(e.inserted_at, vec![5]);
         assert!(e.added.is_empty(), "vertical edges exist: no split");
         assert_eq!(e.new_nodes, vec![NewNode::Copy { of: 5 }]);
@@ -674,7 +661,8 @@ mod tests {
         let active = vec![true; t.len()];
         let mut normal = vec![0.0; x.len()];
         normal[5] = 20f64.to_radians(); // crack at 110°: no edge within 15°
-        let e = plan(&t, &active, &csr, &x, &[5], &nodes(&normal), &FractureParams::default());
+        let e =
+            plan(&mut PlanScratch::default(), &t, &active, &csr, &x, &[5], &nodes(&normal), &FractureParams::default());
         assert_eq!(e.inserted_at, vec![5]);
         assert!(!e.added.is_empty());
         let before = area(&x, &t);
@@ -694,7 +682,16 @@ mod tests {
         let normal = vec![0.0; x.len()];
         // nodes 5 and 6 are neighbours: only the first inserts this check,
         // and the second is reported as waiting (still due)
-        let e = plan(&t, &active, &csr, &x, &[5, 6], &nodes(&normal), &FractureParams::default());
+        let e = plan(
+            &mut PlanScratch::default(),
+            &t,
+            &active,
+            &csr,
+            &x,
+            &[5, 6],
+            &nodes(&normal),
+            &FractureParams::default(),
+        );
         assert_eq!(e.inserted_at, vec![5]);
         assert_eq!(e.waiting, vec![6]);
     }
@@ -706,7 +703,8 @@ mod tests {
         let active = vec![true; t.len()];
         let normal = vec![0.0; x.len()];
         // node 1 = (1, 0) on the bottom: the vertical crack goes up only
-        let e = plan(&t, &active, &csr, &x, &[1], &nodes(&normal), &FractureParams::default());
+        let e =
+            plan(&mut PlanScratch::default(), &t, &active, &csr, &x, &[1], &nodes(&normal), &FractureParams::default());
         assert_eq!(e.crack_faces, vec![[1, 5]]);
         assert_eq!(e.new_nodes, vec![NewNode::Copy { of: 1 }]);
     }

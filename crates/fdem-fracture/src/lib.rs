@@ -15,5 +15,5 @@ pub mod insertion;
 pub mod nodal;
 
 pub use fdem_core::Vec2;
-pub use insertion::{plan, plan_in_order, plan_with, Edits, FractureParams, NewNode, NodeFailure, PlanScratch};
+pub use insertion::{plan, plan_in_order, Edits, FractureParams, NewNode, NodeFailure, PlanScratch};
 pub use nodal::{direction_angle, doubled_direction, nodal_failure};

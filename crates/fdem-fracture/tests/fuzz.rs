@@ -8,6 +8,7 @@
 
 use fdem_fracture::{
     insertion::altitude, insertion::quality, plan, plan_in_order, Edits, FractureParams, NewNode, NodeFailure,
+    PlanScratch,
 };
 use fdem_mesh::generate::triangulate;
 use fdem_mesh::node_elements;
@@ -167,7 +168,7 @@ fn thousands_of_random_insertions_keep_the_mesh_valid() {
                 candidates.swap(i, (rng.next() % (i as u64 + 1)) as usize);
             }
             let failure = NodeFailure { normal: &normal, cracked: &cracked };
-            let edits = plan(&t, &active, &csr, &x, &candidates, &failure, &params);
+            let edits = plan(&mut PlanScratch::default(), &t, &active, &csr, &x, &candidates, &failure, &params);
             // planned in parallel, the same edits as one candidate at a time
             assert_eq!(edits, plan_in_order(&t, &active, &csr, &x, &candidates, &failure, &params), "round {round}");
             let n_before = x.len();

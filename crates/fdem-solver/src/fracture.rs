@@ -10,8 +10,7 @@ use fdem_contact::{Bond, MixedMode};
 use fdem_element::kinematics::{deformation_gradient, polar_rotation, reference_inverse, signed_area};
 use fdem_element::{ReferenceShape, Vec2};
 use fdem_fracture::{
-    direction_angle, doubled_direction, nodal_failure, plan_with, Edits, FractureParams, NewNode, NodeFailure,
-    PlanScratch,
+    direction_angle, doubled_direction, nodal_failure, plan, Edits, FractureParams, NewNode, NodeFailure, PlanScratch,
 };
 use rayon::prelude::*;
 
@@ -53,7 +52,7 @@ pub(crate) struct FractureModel {
     #[serde(skip)]
     node_direction: Vec<[f64; 2]>,
     /// Per node: the crack normal's angle (rad), worked out for the
-    /// candidates of the last check only (what [`plan_with`] reads).
+    /// candidates of the last check only (what [`plan`] reads).
     #[serde(skip)]
     node_angle: Vec<f64>,
     #[serde(skip)]
@@ -279,7 +278,7 @@ impl Simulation {
             candidates.par_sort_unstable_by(|&a, &b| {
                 fr.node_factor[b as usize].total_cmp(&fr.node_factor[a as usize]).then(id(a).cmp(&id(b)))
             });
-            edits = plan_with(
+            edits = plan(
                 &mut fr.plan_scratch,
                 &self.elems.conn,
                 &self.elems.active,
