@@ -155,8 +155,8 @@ pub(super) fn resumed_direction(inp: &NarrowInputs<'_>, old: u32) -> Vec2 {
 /// so far; `along` is [`lies_along`].
 pub(super) type Best = Option<(u8, u32, f64, f64, f64, bool)>;
 
-/// Whether candidate `c` lies along face `face` of a corner node `node`
-/// (a facet of the node's own body that starts or ends at it), rather than
+/// Whether candidate `c` lies along a face of a corner node that runs from
+/// the node in the unit direction `t` ([`face_direction`]), rather than
 /// meeting the face only at the candidate's end, where the other body has a
 /// corner (the candidate runs away from the face beyond the node's
 /// projection, within the slack `XI_SLACK`, and its surface turns by 30° or
@@ -168,11 +168,7 @@ pub(super) type Best = Option<(u8, u32, f64, f64, f64, bool)>;
 /// unopposed: two blocks of the demo passed 7.6 cm into each other that
 /// way (docs/contact.md, "Which facet a node touches", item 8).
 #[inline]
-fn lies_along(inp: &NarrowInputs<'_>, face: u32, node: usize, c: &Candidate) -> bool {
-    let [p, q] = inp.surface.facets[face as usize].nodes;
-    let other = if p as usize == node { q } else { p };
-    let (s, o) = (inp.x[node], inp.x[other as usize]);
-    let t = [o[0] - s[0], o[1] - s[1]];
+fn lies_along(inp: &NarrowInputs<'_>, t: Vec2, c: &Candidate) -> bool {
     let d = inp.frames[c.f as usize].t;
     // which end of the candidate the face runs towards, and the share of
     // the candidate between the node's projection and that end
@@ -189,6 +185,21 @@ fn lies_along(inp: &NarrowInputs<'_>, face: u32, node: usize, c: &Candidate) -> 
             let e = inp.frames[k as usize].t;
             d[0] * e[0] + d[1] * e[1] >= SMOOTH_COS
         }
+    }
+}
+
+/// The direction in which corner face `k` of a node runs away from it:
+/// `faces` is `[into, from]` ([`Surface::faces`]), so the node ends the
+/// first face and starts the second.
+///
+/// [`Surface::faces`]: crate::surface::Surface::faces
+#[inline]
+fn face_direction(inp: &NarrowInputs<'_>, faces: [u32; 2], k: usize) -> Vec2 {
+    let t = inp.frames[faces[k] as usize].t;
+    if k == 0 {
+        [-t[0], -t[1]]
+    } else {
+        t
     }
 }
 
@@ -343,7 +354,7 @@ impl<'i, 'a> Search<'i, 'a> {
             // facets share) goes to the facet that faces the node's face
             // more squarely, so the choice is geometric, not by facet
             // index, and does not depend on the numbering
-            let along = slots == 1 || lies_along(inp, faces[k], self.node, &c);
+            let along = slots == 1 || lies_along(inp, face_direction(inp, faces, k), &c);
             let key = (!along, r);
             if self.best[k].is_none_or(|(rb, _, _, g, fb, ab)| {
                 key < (!ab, rb) || (key == (!ab, rb) && (gap > g || (gap == g && facing < fb)))
