@@ -179,7 +179,9 @@ pub struct NodeFailure<'a> {
 /// node and element. A crack does not start afresh at a node next to an
 /// existing crack (the open crack has relieved it; the crack grows from its
 /// tip instead, and the band beside it is not cut into slivers), and a
-/// crack tip next to another crack links up with it.
+/// crack tip next to another crack links up with it. `scratch` holds the
+/// buffers kept from check to check ([`PlanScratch`]), so that a check
+/// that inserts nothing allocates nothing.
 ///
 /// Each candidate's insertion is planned in parallel on the mesh as it was
 /// at the check, as if nothing were claimed; then, in candidate order, a
