@@ -201,9 +201,10 @@ def test_notched_beam_work_of_fracture():
     Zen 3 VM, 393 s beside other work): 11.53 J/m, 0.930 and 0.965, the
     second outside 3%, and 0.966 and 0.965 with the mesh renumbered once
     or every 1 000 steps (not round-off); on 63f8a01, before contact item
-    8, 13.55 J/m, 1.093 and 1.134, with 90 cracks against 27. On 7 mm: 0.949 at 3 mm against 0.939 expected; on
-    10 mm the beam cracks beside its ligament as well and dissipates more
-    (1.151 at 3 mm; docs/fracture.md)."""
+    8, 13.55 J/m, 1.093 and 1.134, with 90 cracks against 27. On 7 mm:
+    0.949 at 3 mm against 0.939 expected; on 10 mm the beam cracks beside
+    its ligament as well and dissipates more (1.151 at 3 mm;
+    docs/fracture.md)."""
     r = load("three_point_bending").work_of_fracture(0.02, 5e-3, threads=1)
     assert r["ratio_to_ligament"] == pytest.approx(1.0, rel=0.10), r
     assert r["ratio_to_expected"] == pytest.approx(1.0, rel=0.03), r
