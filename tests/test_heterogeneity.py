@@ -105,24 +105,32 @@ def test_a_heterogeneous_ucs_specimen_cracks_and_softens():
     the uniform state, late (the first cracks at 3.6–3.9 times the yield
     strain, depending on the order of the sums: with and without
     renumbering). With Weibull strength (cv 0.3, independent per
-    element) it peaks below that (measured 0.88 UCS; bound 0.7–0.98),
-    cracks (191 insertions; bound 100) and softens: by 4 times the yield
-    strain it carries under 80% of its peak (measured 60%). How far it has
-    softened by then scatters with the specimen and with the order of the
-    sums: over seeds 7–10, with and without renumbering, 21–70% of the
-    peak after 127–631 cracks (docs/fracture.md, "Heterogeneous rock").
-    The same seed gives the same bits."""
+    element) each of four specimens (seeds 7–10) peaks below that (bound
+    0.7–0.98 UCS), cracks (bound 100 insertions) and softens: by 4 times
+    the yield strain they carry under 80% of their peaks on average, and
+    each under 90%. How far one specimen has softened by then scatters
+    with the specimen and with the order of the sums, so the test reads
+    the four together. Measured 2026-11-28 (2-core Zen 3 VM, 2 threads):
+    peaks 0.86–0.94 UCS, 134–458 cracks, 80, 31, 46 and 43% of the peaks
+    (mean 50%); before a node on a crack read both sides (docs/fracture.md),
+    73, 63, 42 and 51% after 128–399 cracks. The same seed gives the same
+    bits."""
     _, uniform = ucs(0.0)
     yield_strain = ROCK.ucs / ROCK.plane_strain_modulus
     plateau = [(s, n) for e, s, n in uniform if yield_strain * 1.1 < e < 3 * yield_strain]
     assert len(plateau) >= 15  # samples every 0.1 of the yield strain
     assert all(s == pytest.approx(ROCK.ucs, rel=0.01) and n == 0 for s, n in plateau)
-    sim, curve = ucs(0.3)
-    stress = np.array([s for _, s, _ in curve])
-    peak = stress.max()
-    assert 0.7 * ROCK.ucs < peak < 0.98 * ROCK.ucs
-    assert sim.insertions > 100
-    assert stress[-1] < 0.8 * peak
+    left = []
+    for seed in (7, 8, 9, 10):
+        sim, curve = ucs(0.3, seed)
+        stress = np.array([s for _, s, _ in curve])
+        peak = stress.max()
+        assert 0.7 * ROCK.ucs < peak < 0.98 * ROCK.ucs, seed
+        assert sim.insertions > 100, (seed, sim.insertions)
+        left.append(stress[-1] / peak)
+        if seed == 7:
+            first = sim
+    assert max(left) < 0.9 and np.mean(left) < 0.8, left
     again, _ = ucs(0.3)
-    assert again.steps == sim.steps and np.array_equal(again.positions(), sim.positions())
-    assert np.array_equal(again.stress(), sim.stress())
+    assert again.steps == first.steps and np.array_equal(again.positions(), first.positions())
+    assert np.array_equal(again.stress(), first.stress())
