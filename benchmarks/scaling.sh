@@ -5,9 +5,9 @@
 #      duration; E(n) against 1 thread);
 #   2. late paper-scale caving steps from a checkpoint at 1–16 threads
 #      (make it with `python examples/block_caving.py --until 1.25
-#      --threads 2`, 10.5 min on the 2-core Zen 3 VM, 47 MB);
+#      --threads 2`, 10.5 min on a 2-core Intel Xeon VM, 47 MB);
 #   3. the 10⁵ impact to 2×10⁻⁴ s after contact (4 960 steps, 13 894
-#      cracks: fragmentation starting; 61 s at 2 threads on the Zen 3 VM)
+#      cracks: fragmentation starting; 61 s at 2 threads on that VM)
 #      at 16 threads first, then 1, 2, 4, 8 (its E(n) column is against
 #      16 threads, the first listed: E(n) against 1 is rate(n)/(n rate(1))).
 # Each part has its own time limit, and writes its table to OUT (default

@@ -129,7 +129,7 @@ def test_notched_beam_meshes_and_insertion(beam_runs):
     notched beam"): with the default early insertion no insertion changes
     the 1 ms mean load by more than 5% of the peak; the three peaks (1 ms
     mean) lie within 5% of each other; the stiffness is the closed form
-    within 5%. Measured 2026-11-28 (2-core Zen 3 VM) with Petersson's
+    within 5%. Measured 2026-11-28 (2-core Intel Xeon VM) with Petersson's
     bilinear softening: changes 2.5%, 1.5% and 3.3%; peaks 15.58, 15.45
     and 15.57 kN/m (0.8% apart); stiffness +1.8%, +1.2% and +0.7%."""
     meshes = [beam_runs[size] for size in (0.01, 0.007, 0.005)]
@@ -162,7 +162,7 @@ def test_notched_beam_insertion_rule(beam_runs):
 def test_notched_beam_check_interval(beam_runs):
     """Issue 33 (3): the peak does not depend on the check interval by
     more than 3% over 5, 10 and 20 steps, on 10 mm. Measured 2026-11-28
-    (9ea0b7d, 2-core Zen 3 VM): 15.581, 15.581 and 15.583 kN/m, within
+    (9ea0b7d, 2-core Intel Xeon VM): 15.581, 15.581 and 15.583 kN/m, within
     0.012%. Before a node on a crack read both sides (docs/fracture.md),
     15.993, 15.532 and 15.984 (2.97%): near the tip, branches that the
     one-sided reading let through took the default's crack tip an
@@ -209,7 +209,7 @@ def test_notched_beam_work_of_fracture():
     work-of-fracture tests. At 5 mm deflection (15 times the peak's) the
     fracture energy is within 10% of G_f (D − a) and within 3% of that
     less what is still bridged (``bridged_energy``). Measured 2026-11-28
-    (2-core Zen 3 VM, 402 s at one thread beside another run): 11.60 J/m,
+    (2-core Intel Xeon VM, 402 s at one thread beside another run): 11.60 J/m,
     0.935 G_f (D − a) and 0.971 of the 11.94 J/m expected, 17 cracks,
     0.176 m of crack projected on the vertical. Before a node on a crack
     read both sides (docs/fracture.md, "A node on a crack reads both
@@ -225,7 +225,7 @@ def test_notched_beam_work_of_fracture():
 def test_notched_beam_work_of_fracture_on_10_mm():
     """As :func:`test_notched_beam_work_of_fracture` on 10 mm, at 3 mm
     deflection: within 10% of G_f (D − a) less what is still bridged.
-    Measured 2026-11-28 (2-core Zen 3 VM, 418 s at one thread beside
+    Measured 2026-11-28 (2-core Intel Xeon VM, 418 s at one thread beside
     another run): 11.46 J/m against 11.64 expected (0.985), one crack
     straight through the ligament (11 insertions, 0.100 m projected on the
     vertical). Before a node on a crack read both sides (docs/fracture.md,

@@ -110,7 +110,7 @@ def test_a_heterogeneous_ucs_specimen_cracks_and_softens():
     the yield strain they carry under 80% of their peaks on average, and
     each under 90%. How far one specimen has softened by then scatters
     with the specimen and with the order of the sums, so the test reads
-    the four together. Measured 2026-11-28 (2-core Zen 3 VM, 2 threads):
+    the four together. Measured 2026-11-28 (2-core Intel Xeon VM, 2 threads):
     peaks 0.86–0.94 UCS, 134–458 cracks, 80, 31, 46 and 43% of the peaks
     (mean 50%); before a node on a crack read both sides (docs/fracture.md),
     73, 63, 42 and 51% after 128–399 cracks. The same seed gives the same
