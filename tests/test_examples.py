@@ -93,8 +93,9 @@ def test_notched_beam_crack_leaves_the_notch_as_one_crack():
     same point), 20 s on 2 cores to 0.275 mm of deflection. When each copy
     of a node read σ1 over its own star only, the notch tip's right copy
     read −19.9° against the left's 4.3° and split a second crack from the
-    tip 30.4° off the first: by then 4 cracks and two far ends, against 2
-    and one now (measured 2026-11-28)."""
+    tip 30.4° off the first: by then 4 insertions and two far ends 3.7 mm
+    apart, against 2 insertions and one far end now (measured
+    2026-11-28)."""
     beam = load("three_point_bending")
     sim = beam.simulation(beam.model(0.01))
     sim.run(until=0.06, progress=False)
@@ -104,8 +105,8 @@ def test_notched_beam_crack_leaves_the_notch_as_one_crack():
     at_tip = d.min(axis=1) < 1e-3
     assert at_tip.sum() >= 2, "the notch tip has cracked"
     far = faces[at_tip][np.arange(at_tip.sum()), d[at_tip].argmax(axis=1)]
-    ends = {tuple(np.round(f / 5e-4).astype(int)) for f in far}
-    assert len(ends) == 1, far
+    # the two faces of one crack end at copies of one node (µm apart)
+    assert np.ptp(far, axis=0).max() < 1e-3, far
 
 
 @pytest.fixture(scope="module")
@@ -211,7 +212,9 @@ def test_notched_beam_work_of_fracture():
     less what is still bridged (``bridged_energy``). Measured 2026-11-28
     (2-core Intel Xeon VM, 402 s at one thread beside another run): 11.60 J/m,
     0.935 G_f (D − a) and 0.971 of the 11.94 J/m expected, 17 cracks,
-    0.176 m of crack projected on the vertical. Before a node on a crack
+    0.176 m of crack projected on the vertical: inside 3% by 0.1 point,
+    on a mesh whose debris moves the reading by a few per cent either way
+    (docs/fracture.md). Before a node on a crack
     read both sides (docs/fracture.md, "A node on a crack reads both
     sides"): 11.53 J/m, 0.930 and 0.965 (an expected failure), with 27
     cracks and 0.243 m. On 7 mm: 0.949 at 3 mm against 0.939 expected
