@@ -188,11 +188,8 @@ impl BroadPhase {
         if self.fresh || self.changed {
             // key → facet of the new surface
             let max_key = surface.facets.last().map_or(0, |f| f.key as usize + 1);
-            self.facet_of_key.clear();
-            self.facet_of_key.resize(max_key.max(self.keys.last().map_or(0, |&k| k as usize + 1)), crate::NONE);
-            for (i, f) in surface.facets.iter().enumerate() {
-                self.facet_of_key[f.key as usize] = i as u32;
-            }
+            let len = max_key.max(self.keys.last().map_or(0, |&k| k as usize + 1));
+            crate::surface::index_by_key(&surface.facets, len, &mut self.facet_of_key);
         }
         if self.fresh || nf < 3 {
             self.bvh = if nf < 3 {
@@ -315,39 +312,32 @@ impl BroadPhase {
         let m = margin;
         let max_key = new.facets.last().map_or(0, |f| f.key as usize + 1);
         // old facet → new facet where it is kept (same key, same nodes),
-        // else NONE, and back: one walk, both lists ascend by key (binary
-        // searches took most of this function at the paper's scale)
-        let mut old_to_new = vec![crate::NONE; old.facets.len()];
-        let mut new_to_old = vec![crate::NONE; new.facets.len()];
-        let mut i = 0;
-        for (j, f) in old.facets.iter().enumerate() {
-            while i < new.facets.len() && new.facets[i].key < f.key {
-                i += 1;
-            }
-            if i < new.facets.len() && new.facets[i].key == f.key && new.facets[i].nodes == f.nodes {
-                old_to_new[j] = i as u32;
-                new_to_old[i] = j as u32;
-            }
-        }
+        // else NONE, and back: walks, both lists ascending by key (binary
+        // searches took most of this function at the paper's scale), in
+        // parallel over chunks, each started by a binary search
+        let (mut old_to_new, mut new_to_old) = (Vec::new(), Vec::new());
+        crate::surface::match_by_key(&old.facets, &new.facets, &mut old_to_new);
+        crate::surface::match_by_key(&new.facets, &old.facets, &mut new_to_old);
         for (j, f) in old.facets.iter().enumerate() {
             if old_to_new[j] == crate::NONE {
                 self.bvh.remove(f.key);
             }
         }
+        // the kept facets' boxes copied and the new ones' made in parallel;
+        // the new ones go into the tree in facet order (serial: few)
         let mut boxes = Vec::with_capacity(new.facets.len());
-        let mut fresh: Vec<u32> = Vec::new();
-        let mut fresh_boxes: Vec<Aabb> = Vec::new();
-        for (i, f) in new.facets.iter().enumerate() {
-            let j = new_to_old[i];
+        boxes.par_extend(new.facets.par_iter().zip(&new_to_old).with_min_len(CHUNK).map(|(f, &j)| {
             if j != crate::NONE {
-                boxes.push(self.boxes[j as usize]);
+                self.boxes[j as usize]
             } else {
-                let bx = facet_box(x, f.nodes, 2.0 * m);
-                self.bvh.insert(bx, f.key);
-                boxes.push(bx);
-                fresh.push(i as u32);
-                fresh_boxes.push(bx);
+                facet_box(x, f.nodes, 2.0 * m)
             }
+        }));
+        let fresh: Vec<u32> =
+            (0..new.facets.len() as u32).into_par_iter().filter(|&i| new_to_old[i as usize] == crate::NONE).collect();
+        let fresh_boxes: Vec<Aabb> = fresh.iter().map(|&i| boxes[i as usize]).collect();
+        for (&i, bx) in fresh.iter().zip(&fresh_boxes) {
+            self.bvh.insert(*bx, new.facets[i as usize].key);
         }
         self.boxes = boxes;
         // the fresh boxes in a grid, so that a node tests only those of its
@@ -356,13 +346,9 @@ impl BroadPhase {
         // boxes sorted by their left side 1.6%); the node's list is sorted
         // after, so the order they are found in does not matter
         let grid = BoxGrid::new(&fresh_boxes);
-        self.facet_of_key.clear();
-        self.facet_of_key.resize(max_key, crate::NONE);
-        for (i, f) in new.facets.iter().enumerate() {
-            self.facet_of_key[f.key as usize] = i as u32;
-        }
+        crate::surface::index_by_key(&new.facets, max_key, &mut self.facet_of_key);
         self.keys.clear();
-        self.keys.extend(new.facets.iter().map(|f| f.key));
+        self.keys.par_extend(new.facets.par_iter().map(|f| f.key));
         // every boundary node's list, chunk by chunk, into reused buffers
         let n_chunks = new.nodes.len().div_ceil(CHUNK);
         self.chunk_lists.resize_with(n_chunks, Vec::new);
@@ -423,19 +409,36 @@ impl BroadPhase {
 
     /// The candidate list from the per-chunk lists and counts, in node
     /// order (reusing the list's buffers).
+    /// Each chunk is copied to its place in parallel (serial, this copy of
+    /// some 330 000 pairs late in the paper-scale run was a serial pass of
+    /// every insertion check).
     fn join_chunk_lists(&mut self) {
         let cand = &mut self.candidates;
+        let (lists, counts) = (&self.chunk_lists, &self.chunk_counts);
+        let nodes: usize = counts.iter().map(Vec::len).sum();
+        let total: usize = lists.iter().map(Vec::len).sum();
         cand.offsets.clear();
+        cand.offsets.resize(nodes + 1, 0);
         cand.items.clear();
-        cand.offsets.push(0);
-        let mut total = 0u32;
-        for (list, counts) in self.chunk_lists.iter().zip(&self.chunk_counts) {
-            for &c in counts {
-                total += c;
-                cand.offsets.push(total);
-            }
-            cand.items.extend_from_slice(list);
+        cand.items.resize(total, 0);
+        let mut parts = Vec::with_capacity(lists.len());
+        let (mut offsets, mut items) = (&mut cand.offsets[1..], &mut cand.items[..]);
+        let mut first = 0u32;
+        for (list, count) in lists.iter().zip(counts) {
+            let (o, ot) = offsets.split_at_mut(count.len());
+            let (i, it) = items.split_at_mut(list.len());
+            parts.push((o, i, list, count, first));
+            (offsets, items) = (ot, it);
+            first += list.len() as u32;
         }
+        parts.into_par_iter().for_each(|(o, i, list, count, first)| {
+            i.copy_from_slice(list);
+            let mut at = first;
+            for (o, &c) in o.iter_mut().zip(count) {
+                at += c;
+                *o = at;
+            }
+        });
     }
 
     /// Number of candidate pairs in the list.

@@ -77,6 +77,45 @@ pub struct Surface {
 /// [`Surface::links`] of a facet end that more than one facet continues.
 pub const MANY: u32 = NONE - 1;
 
+/// Fills `out` (resized to `len`, at least every key + 1) with each
+/// key's facet index in `facets` (ascending keys), [`NONE`] for keys not
+/// there. In parallel over fixed chunks of keys, each chunk's facets found
+/// by a binary search: topology changes rebuild these maps at every crack
+/// insertion, and a serial scatter over every facet was a serial pass of
+/// each (docs/performance.md, "What an insertion check costs").
+pub fn index_by_key(facets: &[SurfaceFacet], len: usize, out: &mut Vec<u32>) {
+    out.clear();
+    out.resize(len, NONE);
+    out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, part)| {
+        let lo = (c * CHUNK) as u64;
+        let hi = lo + part.len() as u64;
+        let start = facets.partition_point(|f| u64::from(f.key) < lo);
+        for (i, f) in facets[start..].iter().enumerate().take_while(|(_, f)| u64::from(f.key) < hi) {
+            part[(u64::from(f.key) - lo) as usize] = (start + i) as u32;
+        }
+    });
+}
+
+/// For each facet of `a`, the index of the facet of `b` with the same key
+/// and the same nodes (both ascending by key), or [`NONE`]: which facets a
+/// topology change kept. In parallel over fixed chunks of `a`, each
+/// starting by a binary search in `b`; the same result as one walk.
+pub fn match_by_key(a: &[SurfaceFacet], b: &[SurfaceFacet], out: &mut Vec<u32>) {
+    out.clear();
+    out.resize(a.len(), NONE);
+    out.par_chunks_mut(CHUNK).zip(a.par_chunks(CHUNK)).for_each(|(part, fa)| {
+        let mut j = b.partition_point(|f| f.key < fa[0].key);
+        for (o, f) in part.iter_mut().zip(fa) {
+            while j < b.len() && b[j].key < f.key {
+                j += 1;
+            }
+            if j < b.len() && b[j].key == f.key && b[j].nodes == f.nodes {
+                *o = j as u32;
+            }
+        }
+    });
+}
+
 impl Surface {
     /// Builds the surface of a mesh with `n_nodes` nodes from its boundary
     /// facets `(nodes, law)`, the reference positions and, per facet, the
@@ -130,13 +169,13 @@ impl Surface {
     /// its row in any order and the row then sorted, which is facet order.
     fn indexed(n_nodes: usize, surface_facets: Vec<SurfaceFacet>, x_ref: &[Vec2]) -> Self {
         use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
-        let degree: Vec<AtomicU32> = (0..n_nodes).map(|_| AtomicU32::new(0)).collect();
+        let degree: Vec<AtomicU32> = (0..n_nodes).into_par_iter().map(|_| AtomicU32::new(0)).collect();
         surface_facets.par_iter().with_min_len(CHUNK).for_each(|f| {
             for n in f.nodes {
                 degree[n as usize].fetch_add(1, Relaxed);
             }
         });
-        let degree: Vec<u32> = degree.into_iter().map(AtomicU32::into_inner).collect();
+        let degree: Vec<u32> = degree.into_par_iter().map(AtomicU32::into_inner).collect();
         // boundary nodes before each fixed chunk of mesh nodes
         let mut before: Vec<u32> =
             degree.par_chunks(CHUNK).map(|c| c.iter().filter(|&&d| d > 0).count() as u32).collect();
@@ -144,16 +183,18 @@ impl Surface {
         for b in &mut before {
             (*b, total) = (total, total + *b);
         }
-        let mut index_of = vec![NONE; n_nodes];
-        index_of.par_chunks_mut(CHUNK).zip(degree.par_chunks(CHUNK)).zip(&before).for_each(|((ix, d), &first)| {
-            let mut next = first;
-            for (i, &d) in ix.iter_mut().zip(d) {
-                if d > 0 {
-                    *i = next;
-                    next += 1;
-                }
-            }
-        });
+        // every entry written below (a serial fill first was a whole pass)
+        let mut index_of = Vec::with_capacity(n_nodes);
+        index_of.par_extend(degree.par_chunks(CHUNK).zip(&before).flat_map_iter(|(d, &first)| {
+            d.iter().scan(first, |next, &d| {
+                Some(if d > 0 {
+                    *next += 1;
+                    *next - 1
+                } else {
+                    NONE
+                })
+            })
+        }));
         // (a parallel filter collects in order)
         let nodes: Vec<u32> = (0..n_nodes as u32).into_par_iter().filter(|&v| degree[v as usize] > 0).collect();
         debug_assert_eq!(nodes.len(), total as usize);
@@ -254,9 +295,9 @@ impl Surface {
     /// reference positions `x_ref`: after building or restoring.
     pub fn derive(&mut self, x_ref: &[Vec2]) {
         let index_of = &self.index_of;
-        for f in &mut self.facets {
+        self.facets.par_iter_mut().with_min_len(crate::CHUNK).for_each(|f| {
             f.ends = f.nodes.map(|n| index_of[n as usize]);
-        }
+        });
         // per boundary node, the facet ending at it and the one starting
         // from it ([`NONE`] or [`MANY`] where not one): both the corners and
         // the links read them

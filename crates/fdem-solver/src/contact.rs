@@ -355,14 +355,12 @@ impl ContactModel {
         self.changed.clear();
         if let Some(old) = old {
             self.resumed.clear();
-            self.resumed.extend(old.facets.iter().map(|f| f.nodes));
+            self.resumed.par_extend(old.facets.par_iter().map(|f| f.nodes));
             // a facet keeps its key through a rebuild; a contact stays on it
             // if it still joins the same two nodes
             let max_key = new.facets.last().map_or(0, |f| f.key as usize + 1);
-            let mut facet_of_key = vec![NONE; max_key];
-            for (k, f) in new.facets.iter().enumerate() {
-                facet_of_key[f.key as usize] = k as u32;
-            }
+            let mut facet_of_key = Vec::new();
+            fdem_contact::surface::index_by_key(&new.facets, max_key, &mut facet_of_key);
             // A node split by this change and its copies are one node cut in
             // pieces, and which piece keeps the id (and the facets ending
             // there) depends on how the mesh is numbered
