@@ -408,37 +408,23 @@ impl BroadPhase {
     }
 
     /// The candidate list from the per-chunk lists and counts, in node
-    /// order (reusing the list's buffers).
-    /// Each chunk is copied to its place in parallel (serial, this copy of
-    /// some 330 000 pairs late in the paper-scale run was a serial pass of
-    /// every insertion check).
+    /// order (reusing the list's buffers). Serial: it runs at broad-phase
+    /// rebuilds inside the time loop too, where nothing may be allocated
+    /// (a parallel copy needs the chunks' slices listed; its gain at
+    /// insertions was not measurable on 16 threads, 2026-11-28).
     fn join_chunk_lists(&mut self) {
         let cand = &mut self.candidates;
-        let (lists, counts) = (&self.chunk_lists, &self.chunk_counts);
-        let nodes: usize = counts.iter().map(Vec::len).sum();
-        let total: usize = lists.iter().map(Vec::len).sum();
         cand.offsets.clear();
-        cand.offsets.resize(nodes + 1, 0);
         cand.items.clear();
-        cand.items.resize(total, 0);
-        let mut parts = Vec::with_capacity(lists.len());
-        let (mut offsets, mut items) = (&mut cand.offsets[1..], &mut cand.items[..]);
-        let mut first = 0u32;
-        for (list, count) in lists.iter().zip(counts) {
-            let (o, ot) = offsets.split_at_mut(count.len());
-            let (i, it) = items.split_at_mut(list.len());
-            parts.push((o, i, list, count, first));
-            (offsets, items) = (ot, it);
-            first += list.len() as u32;
-        }
-        parts.into_par_iter().for_each(|(o, i, list, count, first)| {
-            i.copy_from_slice(list);
-            let mut at = first;
-            for (o, &c) in o.iter_mut().zip(count) {
-                at += c;
-                *o = at;
+        cand.offsets.push(0);
+        let mut total = 0u32;
+        for (list, counts) in self.chunk_lists.iter().zip(&self.chunk_counts) {
+            for &c in counts {
+                total += c;
+                cand.offsets.push(total);
             }
-        });
+            cand.items.extend_from_slice(list);
+        }
     }
 
     /// Number of candidate pairs in the list.
