@@ -82,8 +82,11 @@ pub const MANY: u32 = NONE - 1;
 /// there. In parallel over fixed chunks of keys, each chunk's facets found
 /// by a binary search: topology changes rebuild these maps at every crack
 /// insertion, and a serial scatter over every facet was a serial pass of
-/// each (docs/performance.md, "What an insertion check costs").
+/// each (docs/performance.md, "16 threads on the current code").
 pub fn index_by_key(facets: &[SurfaceFacet], len: usize, out: &mut Vec<u32>) {
+    // the serial scatter this replaced failed on a key out of range
+    debug_assert!(facets.last().is_none_or(|f| (f.key as usize) < len), "a facet key beyond the map");
+    debug_assert!(facets.windows(2).all(|w| w[0].key < w[1].key), "facet keys not ascending");
     out.clear();
     out.resize(len, NONE);
     out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, part)| {
@@ -99,7 +102,8 @@ pub fn index_by_key(facets: &[SurfaceFacet], len: usize, out: &mut Vec<u32>) {
 /// For each facet of `a`, the index of the facet of `b` with the same key
 /// and the same nodes (both ascending by key), or [`NONE`]: which facets a
 /// topology change kept. In parallel over fixed chunks of `a`, each
-/// starting by a binary search in `b`; the same result as one walk.
+/// starting by a binary search in `b`; keys being unique (`3 e + k`), the
+/// same result as one walk over both.
 pub fn match_by_key(a: &[SurfaceFacet], b: &[SurfaceFacet], out: &mut Vec<u32>) {
     out.clear();
     out.resize(a.len(), NONE);
