@@ -99,30 +99,25 @@ def ucs(cv: float, seed: int = 7) -> tuple[fdem.Simulation, list[tuple[float, fl
 
 @pytest.fixture(scope="module")
 def ucs_runs():
-    """The uniform specimen and the Weibull one of seed 7 (cv 0.3)."""
-    return ucs(0.0), ucs(0.3)
+    """The uniform specimen and the Weibull ones of seeds 7–10 (cv 0.3)."""
+    return ucs(0.0), {seed: ucs(0.3, seed) for seed in (7, 8, 9, 10)}
 
 
-def test_a_heterogeneous_ucs_specimen_cracks_and_softens(ucs_runs):
+def test_a_uniform_ucs_specimen_flows_uncracked_and_a_seed_gives_its_bits(ucs_runs):
     """A 50 mm × 100 mm plane-strain specimen between frictionless
     platens to 4 times the strain of its uniform strength: uniform, it
     yields at UCS = 2c cos φ/(1 − sin φ) (within 1%) and flows on that
     plateau uncracked to 3 times its yield strain; only round-off breaks
     the uniform state, late (the first cracks at 3.6–3.9 times the yield
     strain, depending on the order of the sums: with and without
-    renumbering). With Weibull strength (cv 0.3, independent per
-    element, seed 7) it peaks below that (measured 2026-11-28: 0.88 UCS;
-    bound 0.7–0.98) and cracks (134 insertions; bound 100). How far it
-    has softened by 4 times the yield strain is the next test. The same
-    seed gives the same bits."""
-    (_, uniform), (sim, curve) = ucs_runs
+    renumbering). With Weibull strength the same seed gives the same
+    bits."""
+    (_, uniform), runs = ucs_runs
     yield_strain = ROCK.ucs / ROCK.plane_strain_modulus
     plateau = [(s, n) for e, s, n in uniform if yield_strain * 1.1 < e < 3 * yield_strain]
     assert len(plateau) >= 15  # samples every 0.1 of the yield strain
     assert all(s == pytest.approx(ROCK.ucs, rel=0.01) and n == 0 for s, n in plateau)
-    peak = max(s for _, s, _ in curve)
-    assert 0.7 * ROCK.ucs < peak < 0.98 * ROCK.ucs
-    assert sim.insertions > 100
+    sim, _ = runs[7]
     again, _ = ucs(0.3)
     assert again.steps == sim.steps and np.array_equal(again.positions(), sim.positions())
     assert np.array_equal(again.stress(), sim.stress())
@@ -136,33 +131,28 @@ def softening(curve: list[tuple[float, float, int]]) -> tuple[float, float]:
     return stress[peak:].min() / stress[peak], stress[-1] / stress[peak]
 
 
-def test_a_heterogeneous_ucs_specimen_has_a_softening_branch(ucs_runs):
-    """The specimen of the test above (seed 7) softens after its peak: its
-    stress falls under 80% of the peak before 4 times the yield strain
-    (measured 2026-11-28: 75% at 2.6 times, then a residual of 80% on
-    which it flows plastically, Mohr–Coulomb being perfectly plastic).
-    How far one specimen has fallen *at* 4 times the yield strain is a
-    cascade's outcome and scatters with the seed and the order of the
-    sums (seed 7: 44% and 60% without and with renumbering on
-    2026-11-26; 73% and 80% before and after nodes on a crack read both
-    sides, 2026-11-28, when seeds 8–10 went from 63, 42, 51% to 31, 46,
-    43%): that is read over four specimens, in the slow test below."""
-    _, (_, curve) = ucs_runs
-    lowest, _ = softening(curve)
-    assert lowest < 0.8
-
-
-@pytest.mark.slow
-def test_four_heterogeneous_ucs_specimens_soften_on_average():
-    """Seeds 7–10 of the specimen above: each has a softening branch
-    (under 80% of its peak after it), and at 4 times the yield strain
-    they carry on average under 80% of their peaks (measured 2026-11-28:
-    80, 31, 46 and 43%, mean 50%; the code before that day 73, 63, 42,
-    51%, mean 57%). About 90 s at 2 threads."""
+def test_heterogeneous_ucs_specimens_crack_and_soften(ucs_runs):
+    """With Weibull strength (cv 0.3, independent per element) each of
+    four specimens (seeds 7–10) peaks below UCS (bound 0.7–0.98 UCS),
+    cracks (bound 100 insertions) and softens: after its peak its stress
+    falls under 80% of the peak, at 4 times the yield strain it carries
+    under 90% of it, and the four carry under 80% on average. How far
+    one specimen has fallen *at* 4 times the yield strain is a cascade's
+    outcome and scatters with the seed and the order of the sums (seed
+    7: 44% and 60% without and with renumbering on 2026-11-26; 73% and
+    80% before and after nodes on a crack read both sides, 2026-11-28),
+    so the residual is read over the four. Measured 2026-11-28 (2-core
+    Intel Xeon VM, 2 threads): peaks 0.86–0.94 UCS, 134–458 cracks,
+    lowest after the peak 75% (seed 7), at 4 times the yield strain 80,
+    31, 46 and 43% (mean 50%). Seed 7 flows on a residual of 80% from 2.6
+    times the yield strain: Mohr–Coulomb is perfectly plastic, so once
+    the cracks stop the pieces flow at their frictional strength."""
     ends = []
-    for seed in (7, 8, 9, 10):
-        _, curve = ucs(0.3, seed)
+    for seed, (sim, curve) in ucs_runs[1].items():
+        peak = max(s for _, s, _ in curve)
+        assert 0.7 * ROCK.ucs < peak < 0.98 * ROCK.ucs, seed
+        assert sim.insertions > 100, (seed, sim.insertions)
         lowest, end = softening(curve)
-        assert lowest < 0.8, f"seed {seed}"
+        assert lowest < 0.8, (seed, lowest)
         ends.append(end)
-    assert np.mean(ends) < 0.8
+    assert max(ends) < 0.9 and np.mean(ends) < 0.8, ends

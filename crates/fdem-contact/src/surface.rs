@@ -187,18 +187,16 @@ impl Surface {
         for b in &mut before {
             (*b, total) = (total, total + *b);
         }
-        // every entry written below (a serial fill first was a whole pass)
-        let mut index_of = Vec::with_capacity(n_nodes);
-        index_of.par_extend(degree.par_chunks(CHUNK).zip(&before).flat_map_iter(|(d, &first)| {
-            d.iter().scan(first, |next, &d| {
-                Some(if d > 0 {
-                    *next += 1;
-                    *next - 1
-                } else {
-                    NONE
-                })
-            })
-        }));
+        let mut index_of = vec![NONE; n_nodes];
+        index_of.par_chunks_mut(CHUNK).zip(degree.par_chunks(CHUNK)).zip(&before).for_each(|((ix, d), &first)| {
+            let mut next = first;
+            for (i, &d) in ix.iter_mut().zip(d) {
+                if d > 0 {
+                    *i = next;
+                    next += 1;
+                }
+            }
+        });
         // (a parallel filter collects in order)
         let nodes: Vec<u32> = (0..n_nodes as u32).into_par_iter().filter(|&v| degree[v as usize] > 0).collect();
         debug_assert_eq!(nodes.len(), total as usize);

@@ -287,7 +287,10 @@ impl Simulation {
             for &p in &candidates {
                 both[p as usize] = dir[p as usize];
             }
-            for b in &fr.bonds {
+            // (a bonded node is on a crack: without a cracked candidate no
+            // bond adds anything, and the serial pass over them is skipped)
+            let bonded = if candidates.iter().any(|&p| fr.cracked[p as usize]) { &fr.bonds[..] } else { &[] };
+            for b in bonded {
                 let [u, v] = b.nodes.map(|w| w as usize);
                 if flags[u] != 0 {
                     both[u] = [both[u][0] + dir[v][0], both[u][1] + dir[v][1]];

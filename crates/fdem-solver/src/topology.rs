@@ -117,24 +117,14 @@ pub(crate) fn build_surface(
             (list, apex, keys)
         })
         .collect();
-    // joined in element order, each chunk copied to its place in parallel
-    // (serial, a pass over every facet at every insertion check)
     let total = chunks.iter().map(|c| c.0.len()).sum();
-    let (mut list, mut apex, mut keys) = (vec![([0; 2], 0); total], vec![[0.0; 2]; total], vec![0; total]);
-    let mut parts = Vec::with_capacity(chunks.len());
-    let (mut l_rest, mut a_rest, mut k_rest) = (&mut list[..], &mut apex[..], &mut keys[..]);
-    for c in &chunks {
-        let (l, lt) = l_rest.split_at_mut(c.0.len());
-        let (a, at) = a_rest.split_at_mut(c.0.len());
-        let (k, kt) = k_rest.split_at_mut(c.0.len());
-        parts.push((l, a, k, c));
-        (l_rest, a_rest, k_rest) = (lt, at, kt);
+    let (mut list, mut apex, mut keys) =
+        (Vec::with_capacity(total), Vec::with_capacity(total), Vec::with_capacity(total));
+    for (l, a, k) in chunks {
+        list.extend_from_slice(&l);
+        apex.extend_from_slice(&a);
+        keys.extend_from_slice(&k);
     }
-    parts.into_par_iter().for_each(|(l, a, k, c)| {
-        l.copy_from_slice(&c.0);
-        a.copy_from_slice(&c.1);
-        k.copy_from_slice(&c.2);
-    });
     let mut surface = Surface::with_keys(x_ref.len(), &list, x_ref, &apex, &keys);
     set_apexes(&mut surface, conn);
     surface
@@ -423,20 +413,19 @@ impl crate::simulation::Simulation {
         // (a binary search in `touched` per boundary node was 0.4% of a
         // fragmenting impact's run, serial)
         let touched = NodeBits::of(mass.len(), touched.iter().copied());
-        // in parallel over the boundary nodes, the stale ones collected in
-        // order (serial, this was a pass over every boundary node at every
-        // insertion check)
-        let omega = &self.frequencies.contact_omega;
-        let carried = |v: u32| {
+        carry.spare.clear();
+        for &v in &new.nodes {
             let i = v as usize;
             let ob = old.index_of.get(i).copied().unwrap_or(NONE);
             let same =
                 ob != NONE && old_mass.get(i).is_some_and(|m| m.to_bits() == mass[i].to_bits()) && !touched.has(v);
-            same.then(|| omega[ob as usize])
-        };
-        carry.spare.clear();
-        carry.spare.par_extend(new.nodes.par_iter().with_min_len(crate::CHUNK).map(|&v| carried(v).flatten()));
-        carry.stale.par_extend(new.nodes.par_iter().with_min_len(crate::CHUNK).filter(|&&v| carried(v).is_none()));
+            if same {
+                carry.spare.push(self.frequencies.contact_omega[ob as usize]);
+            } else {
+                carry.stale.push(v);
+                carry.spare.push(None);
+            }
+        }
         std::mem::swap(&mut self.frequencies.contact_omega, &mut carry.spare);
     }
 }
