@@ -468,9 +468,6 @@ impl ContactModel {
                     let single = faces[0] == NONE;
                     let (slot0, slot1) = slots;
                     if stays {
-                        // the same faces as before: a smooth node's second
-                        // memory is empty
-                        debug_assert!(!single || from[1].is_none());
                         // Neither the node nor its facets changed, so its
                         // faces are the same facets, with the same normals
                         // to the bit: each contact goes on in its own slot,
@@ -518,28 +515,46 @@ impl ContactModel {
                         }
                         return;
                     }
-                    for (k, slot) in [slot0, slot1].into_iter().enumerate().take(if single { 1 } else { 2 }) {
-                        let key = if single { NONE } else { new.facets[faces[k] as usize].key };
-                        let same_face = |o: &Old| {
-                            o.is_some_and(|(_, _, _, face)| face != NONE && old.facets[face as usize].key == key)
-                        };
-                        let pick = from.iter().find(|o| same_face(o)).copied().flatten().or_else(|| {
-                            // the old contact whose face points most nearly the same way
-                            let n = if single { new.mean_normal(x, b) } else { new.facet_normal(x, faces[k]) };
-                            let dot = |o: &(ContactState, f64, usize, u32)| {
-                                let m = old_normal(o);
-                                m[0] * n[0] + m[1] * n[1]
+                    // which old contact each slot takes up: at a corner the
+                    // one on the same face, or whose face points most nearly
+                    // the same way; on a smooth stretch the first the one
+                    // whose face points most nearly the node's way, the
+                    // second the other one (on a second body,
+                    // `Search::run`), if the first took one
+                    let pieces = created || split.binary_search(&node).is_ok();
+                    let mut first_taken = None;
+                    for (k, slot) in [slot0, slot1].into_iter().enumerate() {
+                        let pick = if single && k == 1 {
+                            // (not one on the first's facet or next to it: the
+                            // two faces of a corner on one body)
+                            first_taken.map(|i: usize| 1 - i).filter(|&j| {
+                                let facet = |i: usize| from[i].map_or(NONE, |o| o.0.facet);
+                                let (f, g) = (facet(1 - j), facet(j));
+                                g != NONE && f != g && !old.adjacent(f, g)
+                            })
+                        } else {
+                            let key = if single { NONE } else { new.facets[faces[k] as usize].key };
+                            let same_face = |o: &Old| {
+                                o.is_some_and(|(_, _, _, face)| face != NONE && old.facets[face as usize].key == key)
                             };
-                            from.iter()
-                                .flatten()
-                                .filter(|o| dot(o) > 0.0)
-                                .max_by(|p, q| dot(p).total_cmp(&dot(q)))
-                                .copied()
-                        });
-                        let Some((s, depth, ..)) = pick else { continue };
+                            (0..2).find(|&i| same_face(&from[i])).or_else(|| {
+                                // the old contact whose face points most nearly the same way
+                                let n = if single { new.mean_normal(x, b) } else { new.facet_normal(x, faces[k]) };
+                                let dot = |i: &usize| {
+                                    let m = old_normal(from[*i].as_ref().expect("an old contact"));
+                                    m[0] * n[0] + m[1] * n[1]
+                                };
+                                (0..2)
+                                    .filter(|&i| from[i].is_some() && dot(&i) > 0.0)
+                                    .max_by(|p, q| dot(p).total_cmp(&dot(q)))
+                            })
+                        };
+                        if k == 0 {
+                            first_taken = pick;
+                        }
+                        let Some((s, depth, ..)) = pick.and_then(|i| from[i]) else { continue };
                         let of = &old.facets[s.facet as usize];
                         let f = facet_of_key.get(of.key as usize).copied().unwrap_or(NONE);
-                        let pieces = created || split.binary_search(&node).is_ok();
                         *slot = if !pieces && f != NONE && same_ends(new.facets[f as usize].nodes, of.nodes) {
                             ContactState {
                                 facet: f,

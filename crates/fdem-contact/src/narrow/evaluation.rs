@@ -60,9 +60,11 @@ pub struct NarrowInputs<'a> {
     pub dt: f64,
 }
 
-/// The contacts of the boundary nodes: per node a first contact and, at a
-/// corner of its body ([`Surface::faces`]), a second one, so that each of
-/// the corner's two faces bears on the other bodies by itself. A corner
+/// The contacts of the boundary nodes: per node a first contact and a
+/// second one. At a corner of its body ([`Surface::faces`]) each of the
+/// corner's two faces bears on the other bodies by itself; on a smooth
+/// stretch the second bears on a second body the node lies deeper in than
+/// in the first's (where three bodies meet; `Search::run`). A corner
 /// node pushed out diagonally (prestressed rock at a joint crossing) needs
 /// a force on each face; with a single contact it can press on one facet
 /// only and the rock around the corner ends up in tension (measured: +2 MPa
@@ -71,13 +73,12 @@ pub struct NarrowInputs<'a> {
 pub struct Contacts<'a> {
     /// First contact's memory, per boundary node.
     pub states: &'a mut [ContactState],
-    /// Second contact's memory, per boundary node: used at corner nodes
-    /// only; elsewhere it must be empty, and it is left untouched.
+    /// Second contact's memory, per boundary node.
     pub corner_states: &'a mut [ContactState],
     /// First contact of this step, per boundary node.
     pub out: &'a mut [NodeContact],
-    /// Second contact of this step, per boundary node (facet [`NONE`] but
-    /// at corners; left untouched elsewhere).
+    /// Second contact of this step, per boundary node (facet [`NONE`]
+    /// where there is none).
     pub corner_out: &'a mut [NodeContact],
     /// Per boundary node: bit 0 set when the first memory is not empty, bit
     /// 1 when the second is not ([`mark_busy`]; kept up to date by
@@ -217,11 +218,8 @@ fn evaluate_node(
     let mut search = Search::new(inp, b);
     search.run(&states, acc);
     let Search { node, faces, slots, best, .. } = search;
-    // a smooth node's second contact stays empty from the topology change
-    // that made it smooth (`adopt` starts every memory empty): not touched
-    debug_assert!(slots == 2 || (*states[1] == ContactState::default() && out[1].facet == NONE));
     let mut busy = 0;
-    for k in 0..slots {
+    for k in 0..2 {
         let face = (slots == 2).then(|| faces[k]);
         match best[k] {
             Some((r, f, xi, gap, ..)) => {

@@ -215,11 +215,20 @@ pub(super) struct Search<'i, 'a> {
     ///
     /// [`Surface::faces`]: crate::surface::Surface::faces
     pub(super) faces: [u32; 2],
-    /// Contacts the node has: 1 on a smooth stretch, 2 at a corner.
+    /// Faces the node bears with: 1 on a smooth stretch (whose second
+    /// contact is on a second body, [`Search::run`]), 2 at a corner.
     pub(super) slots: usize,
     pub(super) best: [Best; 2],
     /// Each contact's bearing normal, computed on first use.
     own: [Option<Vec2>; 2],
+    /// Per contact, a facet it may take neither nor a neighbour of
+    /// ([`NONE`]: none): at a smooth node each contact keeps away from the
+    /// other's facet, so that the two bear on different bodies.
+    apart: [u32; 2],
+    /// At a smooth node without a second contact's memory: the first
+    /// contact's gap (m), which a new second must be deeper than (infinite
+    /// otherwise).
+    deeper_than: f64,
 }
 
 impl<'i, 'a> Search<'i, 'a> {
@@ -229,7 +238,18 @@ impl<'i, 'a> Search<'i, 'a> {
         let node = inp.surface.nodes[b] as usize;
         let faces = inp.surface.faces[b];
         let slots = if faces[0] == NONE { 1 } else { 2 };
-        Self { inp, b, node, s: inp.x[node], faces, slots, best: [None; 2], own: [None; 2] }
+        Self {
+            inp,
+            b,
+            node,
+            s: inp.x[node],
+            faces,
+            slots,
+            best: [None; 2],
+            own: [None; 2],
+            apart: [NONE; 2],
+            deeper_than: f64::INFINITY,
+        }
     }
 
     /// Finds each contact's best candidate. The facet a contact touched
@@ -239,11 +259,62 @@ impl<'i, 'a> Search<'i, 'a> {
     /// step after step (a closed joint, a resting block), so most nodes in
     /// contact test one candidate instead of all of them; what is found is
     /// the same as testing all of them.
+    ///
+    /// A corner node's two contacts search side by side, one per face. A
+    /// node on a smooth stretch bears with its whole surface: its first
+    /// contact as a corner's, and a second one on another body where it
+    /// lies deeper in that body than in the first contact's facet (a facet
+    /// neither the first's nor next to it). Where three bodies meet, a
+    /// node that held only the shallower of two went on into the other:
+    /// five nodes of the demo lay 3–8 cm inside other pieces at 0.8 s that
+    /// way (docs/contact.md, "Which facet a node touches", item 9). Each
+    /// contact keeps away from the other's facet, so they stay on two
+    /// bodies; a second contact, once made, keeps its facet like any
+    /// other.
     #[inline]
     pub(super) fn run(&mut self, states: &[&mut ContactState; 2], acc: &mut ContactPartial) {
+        self.run_as::<false>(states, acc);
+    }
+
+    /// [`Search::run`]; with `ALL`, testing every candidate for each
+    /// contact searched (what the faster order must find; tests only).
+    #[inline]
+    fn run_as<const ALL: bool>(&mut self, states: &[&mut ContactState; 2], acc: &mut ContactPartial) {
+        if self.slots == 2 {
+            self.search::<ALL>(states, acc, [true, true]);
+            return;
+        }
+        // (a second contact resumed after a topology change has no facet
+        // yet, but a memory)
+        let has_second = *states[1] != ContactState::default();
+        self.apart = [states[1].facet, NONE];
+        self.search::<ALL>(states, acc, [true, false]);
+        match self.best[0] {
+            Some((_, first, _, gap, ..)) => {
+                self.apart = [NONE, first];
+                if !has_second {
+                    self.deeper_than = gap;
+                }
+            }
+            // nothing the first could take: nor could a new second
+            None if !has_second => return,
+            None => self.apart = [NONE; 2],
+        }
+        self.search::<ALL>(states, acc, [false, true]);
+    }
+
+    /// The search of [`Search::run`] for the contacts flagged in `want`.
+    #[inline]
+    fn search<const ALL: bool>(&mut self, states: &[&mut ContactState; 2], acc: &mut ContactPartial, want: [bool; 2]) {
         let row = self.inp.candidates.row(self.b);
+        if ALL {
+            for &f in row {
+                self.consider(f, want, states, acc);
+            }
+            return;
+        }
         let mut open = [false; 2];
-        for k in 0..self.slots {
+        for k in (0..2).filter(|&k| want[k]) {
             let f = states[k].facet;
             if f != NONE && row.binary_search(&f).is_ok() {
                 self.consider(f, [k == 0, k == 1], states, acc);
@@ -320,7 +391,11 @@ impl<'i, 'a> Search<'i, 'a> {
         let mut corner: Option<Option<f64>> = None;
         let mut c = Candidate { f, xi, gap, n: frame.normal(), len: frame.len };
         let (slots, b, faces) = (self.slots, self.b, self.faces);
-        for k in (0..slots).filter(|&k| open[k]) {
+        for k in (0..2).filter(|&k| open[k]) {
+            let apart = self.apart[k];
+            if apart != NONE && (f == apart || inp.surface.adjacent(f, apart)) {
+                continue;
+            }
             // the face that bears: the node's mean normal, or at a corner
             // the contact's own facet
             let m = *self.own[k].get_or_insert_with(|| {
@@ -347,6 +422,11 @@ impl<'i, 'a> Search<'i, 'a> {
                 }
             }
             let gap = c.gap;
+            // a smooth node's new second contact: only on a body it lies
+            // deeper in than in the first's facet
+            if k == 1 && slots == 1 && gap >= self.deeper_than {
+                continue;
+            }
             let Some(r) = rank(inp, self.node, &*states[k], &c) else { continue };
             // at a corner a facet along the face comes first, whatever its
             // rank (`lies_along`); then the lower rank; equal ranks: the
@@ -530,16 +610,22 @@ mod tests {
                 let mut fast = Search::new(&inp, b);
                 fast.run(&memories, &mut acc);
                 let mut all = Search::new(&inp, b);
-                for &f in inp.candidates.row(b) {
-                    all.consider(f, [true, true], &memories, &mut ContactPartial::default());
-                }
+                all.run_as::<true>(&memories, &mut ContactPartial::default());
                 assert_eq!(fast.best, all.best, "node {b}, shift {shift}");
-                if (0..fast.slots).all(|k| matches!(fast.best[k], Some((0, ..)))) {
-                    // every contact kept its facet: one test each
-                    assert_eq!(acc.pairs, fast.slots as u64, "node {b}, shift {shift}");
+                let rank0 = |k: usize| matches!(fast.best[k], Some((0, ..)));
+                let smooth_second = memories[1].facet != NONE;
+                if rank0(0) && (if fast.slots == 2 { rank0(1) } else { !smooth_second || rank0(1) }) {
+                    // every contact kept its facet: one test each; a
+                    // smooth node without a second contact tests every
+                    // candidate for one
+                    let tests = match (fast.slots, smooth_second) {
+                        (2, _) | (1, true) => 2,
+                        _ => 1 + inp.candidates.row(b).len(),
+                    };
+                    assert_eq!(acc.pairs, tests as u64, "node {b}, shift {shift}");
                     kept += 1;
                 }
-                for (k, m) in memories.iter().enumerate().take(fast.slots) {
+                for (k, m) in memories.iter().enumerate() {
                     match fast.best[k] {
                         Some((r, f, ..)) if m.facet != NONE && f != m.facet => moved_on += usize::from(r > 0),
                         None if m.facet != NONE => lost += 1,
@@ -752,6 +838,70 @@ mod tests {
         assert!(!held([0.001, 0.005]), "beside A's side");
         assert!(!held([0.004, 0.005]), "nearer A's side than its base");
         assert!(!held([0.5, 0.02]), "deeper than FOUND_INSIDE_DEPTH");
+    }
+
+    /// Item 9 of docs/contact.md: a node on a smooth stretch that lies in
+    /// two bodies bears on both. Body C's bottom is two collinear facets
+    /// meeting at node N (a smooth node) at x = 0; under N, block A (x ≤
+    /// 0.001) and block B (x ≥ −0.001) overlap by 2 mm, B's top 1 mm
+    /// higher than A's. N, moving down at 20 m/s, has entered A by 0.5
+    /// mm and B by 1.5 mm within the step (both through the facets'
+    /// lines). Last step N held a contact on A's top (rank 0), so the
+    /// first contact stays there; the second goes to B's top, the
+    /// deeper, with the full spring `k ℓ × 1.5 mm` (ℓ = 0.5 m, half of
+    /// each of N's two 0.5 m facets; closed form to 1e-9). Before, N held
+    /// A alone and went on into B. A node pressed into A alone (B lower)
+    /// has one contact.
+    #[test]
+    fn a_smooth_node_in_two_bodies_bears_on_both() {
+        let (k, dt) = (1e9, 1e-4);
+        let run = |b_top: f64| {
+            let body_c: [Vec2; 4] = [[-0.5, -0.0005], [0.0, -0.0005], [0.5, -0.0005], [0.0, 1.0]];
+            let block_a: [Vec2; 4] = [[-1.0, -1.0], [0.001, -1.0], [0.001, 0.0], [-1.0, 0.0]];
+            let block_b: [Vec2; 4] = [[-0.001, -1.0], [1.0, -1.0], [1.0, b_top], [-0.001, b_top]];
+            let (x, surface, broad) = blocks(&[&body_c, &block_a, &block_b]);
+            let node = 1; // N
+            let b = surface.index_of[node] as usize;
+            assert_eq!(surface.faces[b][0], NONE, "N is a smooth node");
+            let facet = |p: Vec2, q: Vec2| {
+                let at = |v: Vec2| x.iter().position(|&w| w == v).unwrap() as u32;
+                surface.facets.iter().position(|f| f.nodes == [at(p), at(q)]).unwrap() as u32
+            };
+            let (top_a, top_b) = (facet([0.001, 0.0], [-1.0, 0.0]), facet([1.0, b_top], [-0.001, b_top]));
+            // body C moving down at 20 m/s
+            let v: Vec<Vec2> = (0..x.len()).map(|i| if i < 4 { [0.0, -20.0] } else { [0.0; 2] }).collect();
+            let mass = vec![1.0; x.len()];
+            let mut frames = vec![FacetFrame::default(); surface.facets.len()];
+            facet_frames(&surface, &x, &mut frames);
+            let laws = [InterfaceLaw::new(k, k, 0.0, 0.0, 0.0).unwrap()];
+            let inp = NarrowInputs {
+                x: &x,
+                v: &v,
+                mass: &mass,
+                surface: &surface,
+                frames: &frames,
+                candidates: &broad.candidates,
+                laws: &laws,
+                resumed: &[],
+                dt,
+            };
+            let nb = surface.nodes.len();
+            let mut states = vec![ContactState::default(); nb];
+            states[b] = ContactState { facet: top_a, depth: 0.0001, ..Default::default() };
+            let (out, _) = evaluate_once(&inp, states, vec![ContactState::default(); nb]);
+            (out[0][b], out[1][b], top_a, top_b)
+        };
+        let (first, second, top_a, top_b) = run(0.001);
+        assert_eq!(first.facet, top_a, "{first:?}");
+        assert_eq!(second.facet, top_b, "{second:?}");
+        let expected = k * 0.5 * 0.0015;
+        assert!((second.gap + 0.0015).abs() < 1e-12, "{second:?}");
+        assert!((second.normal_force - expected).abs() < 1e-9 * expected, "{second:?}, expected {expected}");
+        assert!((first.normal_force - k * 0.5 * 0.0005).abs() < 1e-9 * expected, "{first:?}");
+        // B's top 1 mm below A's: N is in A alone
+        let (first, second, top_a, _) = run(-0.001);
+        assert_eq!(first.facet, top_a);
+        assert_eq!(second.facet, NONE, "{second:?}");
     }
 
     /// Item 8 of docs/contact.md: at a junction of joints a block's corner
