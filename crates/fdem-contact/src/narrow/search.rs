@@ -391,6 +391,23 @@ impl<'i, 'a> Search<'i, 'a> {
         let mut corner: Option<Option<f64>> = None;
         let mut c = Candidate { f, xi, gap, n: frame.normal(), len: frame.len };
         let (slots, b, faces) = (self.slots, self.b, self.faces);
+        // a corner sharper than 2 × (90° − 75°) = 30° pressed head-on into
+        // a facet: neither face opposes it within 75°, though the corner
+        // does (its faces' mean normal); the face nearer to opposing it
+        // bears then (item 10 of docs/contact.md: a 23° wedge's tip lost
+        // its contact so and went 10 cm into the rock it pressed on)
+        let sharp = if slots == 2 && on_facet {
+            let [m0, m1] = [0, 1].map(|k| inp.frames[faces[k] as usize].normal());
+            let (f0, f1) = (m0[0] * c.n[0] + m0[1] * c.n[1], m1[0] * c.n[0] + m1[1] * c.n[1]);
+            let mean = [m0[0] + m1[0], m0[1] + m1[1]];
+            let across = mean[0] * c.n[0] + mean[1] * c.n[1];
+            (f0 > -FACING_COS
+                && f1 > -FACING_COS
+                && across < -FACING_COS * (mean[0] * mean[0] + mean[1] * mean[1]).sqrt())
+            .then_some(usize::from(f1 < f0))
+        } else {
+            None
+        };
         for k in (0..2).filter(|&k| open[k]) {
             let apart = self.apart[k];
             if apart != NONE && (f == apart || inp.surface.adjacent(f, apart)) {
@@ -410,7 +427,7 @@ impl<'i, 'a> Search<'i, 'a> {
             // lies along it slides on: a face at an angle (the crack face at
             // a block's corner next to a separating piece's edge) would
             // touch a facet it has already passed
-            if facing > -FACING_COS || (!on_facet && facing > -SMOOTH_COS) {
+            if (facing > -FACING_COS && sharp != Some(k)) || (!on_facet && facing > -SMOOTH_COS) {
                 continue;
             }
             if !on_facet {
@@ -902,6 +919,49 @@ mod tests {
         let (first, second, top_a, _) = run(-0.001);
         assert_eq!(first.facet, top_a);
         assert_eq!(second.facet, NONE, "{second:?}");
+    }
+
+    /// Item 10 of docs/contact.md: the tip of a 20° wedge pressed head-on
+    /// into a flat face. Each of its faces is 80° from opposing the face,
+    /// beyond item 1's 75°, so neither took it up and the tip went on into
+    /// the rock (10 cm in the demo). Now the face nearer to opposing it
+    /// bears, with its half projected on the facet: `ℓ = ½ L |m·n| = w/2`
+    /// for a wedge of half-width `w` at its base; moved 1 mm in within the
+    /// step, the tip carries `k (w/2) × 1 mm` (closed form to 1e-9).
+    /// Turned by 30°, one face opposes the facet within 75° and bears by
+    /// item 1 as before: `ℓ = ½ L cos 50°`.
+    #[test]
+    fn a_sharp_corner_pressed_head_on_bears_on_the_face() {
+        let (k, delta, half_width) = (1e9, 1e-3, (10f64).to_radians().tan());
+        let run = |tilt: f64| {
+            // the wedge, its tip at the origin pointing down, turned by
+            // `tilt` about the tip, then pushed δ down
+            let (sn, cs) = tilt.sin_cos();
+            let turn = |p: Vec2| [cs * p[0] - sn * p[1], sn * p[0] + cs * p[1] - delta];
+            let wedge: [Vec2; 3] = [[0.0, 0.0], [half_width, 1.0], [-half_width, 1.0]].map(turn);
+            let block: [Vec2; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 0.0], [-1.0, 0.0]];
+            let (x, surface, broad) = blocks(&[&wedge, &block]);
+            let b = surface.index_of[0] as usize;
+            assert_ne!(surface.faces[b][0], NONE, "the tip is a corner");
+            let top = surface.facets.iter().position(|f| f.nodes == [5, 6]).unwrap() as u32;
+            let law = InterfaceLaw::new(k, k, 0.0, 0.0, 0.0).unwrap();
+            with_inputs(&x, &surface, &broad, law, Some((0, [0.0, -20.0])), |inp| {
+                let none = vec![ContactState::default(); surface.nodes.len()];
+                let (out, _) = evaluate_once(inp, none.clone(), none);
+                let held: Vec<NodeContact> = [out[0][b], out[1][b]].into_iter().filter(|c| c.facet != NONE).collect();
+                assert!(held.iter().all(|c| c.facet == top), "{held:?}");
+                held
+            })
+        };
+        let held = run(0.0);
+        assert_eq!(held.len(), 1, "{held:?}");
+        let expected = k * 0.5 * half_width * delta;
+        assert!((held[0].normal_force - expected).abs() < 1e-9 * expected, "{:?}, expected {expected}", held[0]);
+        let held = run(30f64.to_radians());
+        assert_eq!(held.len(), 1, "{held:?}");
+        let face = f64::hypot(half_width, 1.0);
+        let expected = k * 0.5 * face * 50f64.to_radians().cos() * delta;
+        assert!((held[0].normal_force - expected).abs() < 1e-9 * expected, "{:?}, expected {expected}", held[0]);
     }
 
     /// Item 8 of docs/contact.md: at a junction of joints a block's corner
