@@ -541,12 +541,12 @@ impl ContactModel {
                                 // the old contact whose face points most nearly the same way
                                 let n = if single { new.mean_normal(x, b) } else { new.facet_normal(x, faces[k]) };
                                 let dot = |i: &usize| {
-                                    let m = old_normal(from[*i].as_ref().expect("an old contact"));
-                                    m[0] * n[0] + m[1] * n[1]
+                                    from[*i].as_ref().map_or(f64::NEG_INFINITY, |o| {
+                                        let m = old_normal(o);
+                                        m[0] * n[0] + m[1] * n[1]
+                                    })
                                 };
-                                (0..2)
-                                    .filter(|&i| from[i].is_some() && dot(&i) > 0.0)
-                                    .max_by(|p, q| dot(p).total_cmp(&dot(q)))
+                                (0..2).filter(|i| dot(i) > 0.0).max_by(|p, q| dot(p).total_cmp(&dot(q)))
                             })
                         };
                         if k == 0 {
