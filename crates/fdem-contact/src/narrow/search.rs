@@ -7,6 +7,10 @@
 //! corner a facet along the face comes before one that meets it only at
 //! its end ([`lies_along`]); and among equal ranks the shallower
 //! penetration wins.
+//!
+//! Over 800 lines with its unit tests, which build small contact scenes
+//! (three bodies at a point, a sharp wedge, a corner on two faces) round
+//! one rule each; the code itself is about 470.
 
 use super::projection::{corner_gap, node_normal, projects_inside, XI_SLACK};
 use super::{ContactPartial, ContactState, NarrowInputs};
