@@ -230,12 +230,12 @@ def test_quick_caving_leaves_no_piece_inside_another(quick_caving):
     1% of the mean element size `h` (3.1 m). Contact penetrations under
     the overburden stay far below that. At the end of the demo (0.8 s,
     2-core Intel Xeon VM, 2026-11-28; the same on the Zen 4 VM,
-    2026-11-29) 2 nodes without contact lie deeper, 7.6 cm: the two copies
-    of a node at a crack's mouth, inside an element of another piece whose
-    nearest side is an interior edge, so that item 7 (a node found inside
-    is taken up on the element's nearest surface facet) cannot take them
-    up (docs/contact.md, "What is left"; a third contact per corner, tried,
-    did not help). There were 5 (7.8 cm) before
+    2026-11-29) 2 nodes without contact lie deeper, 7.6 cm: two nodes on
+    the two faces of a crack's mouth, inside an element of another piece
+    whose nearest side is an interior edge, so that item 7 (a node found
+    inside is taken up on the element's nearest surface facet) cannot take
+    them up (docs/contact.md, "What is left"; a third contact per corner,
+    tried, did not help). There were 5 (7.8 cm) before
     a smooth node bore on a second body and a sharp corner head-on
     (items 9 and 10), 13 (24 cm) before a corner's face bore on the face
     along it (item 8), and 80 (0.41 m) before contact took up nodes found
