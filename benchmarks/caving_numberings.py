@@ -11,8 +11,8 @@ each on two threads of the 2-core VM).
 
 Per run: cracks, fragments, fallen area (m², below the undercut level),
 the energy residual as a share of the energy supplied, the largest
-fragment energy beyond its fall (J/kg; tests/test_caving.py bounds it at
-27), the fastest fragment (m/s), and the nodes inside another piece deeper
+fragment energy beyond its fall (J/kg; tests/test_caving.py bounds it by
+the stress the undercut releases), the fastest fragment (m/s), and the nodes inside another piece deeper
 than 1% of the mean element size `h`: without any contact ("loose", with
 the deepest) and in any state ("deep"). Totals and ranges at the end.
 

@@ -4,6 +4,7 @@ DESIGN §4.6 and §5). Tolerances beside each check."""
 from __future__ import annotations
 
 import csv
+import dataclasses
 import math
 
 import fdem
@@ -219,43 +220,70 @@ def _loose_nodes(summary):
     return np.unique(o["node"][free]), (float(o["depth"][free].max()) if free.any() else 0.0), h
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="2 nodes of the demo lie deeper than 1% of h inside another piece without contact at 0.8 s, "
-    "7.6 cm: inside an element whose nearest side is an interior edge, which item 7 cannot take up "
-    "(docs/contact.md, 'What is left')",
-)
-def test_quick_caving_leaves_no_piece_inside_another(quick_caving):
-    """No node without a contact may lie inside another piece deeper than
-    1% of the mean element size `h` (3.1 m). Contact penetrations under
-    the overburden stay far below that. At the end of the demo (0.8 s,
-    2-core Intel Xeon VM, 2026-11-28; the same on the Zen 4 VM,
-    2026-11-29) 2 nodes without contact lie deeper, 7.6 cm: two nodes on
-    the two faces of a crack's mouth, inside an element of another piece
-    whose nearest side is an interior edge, so that item 7 (a node found
-    inside is taken up on the element's nearest surface facet) cannot take
-    them up (docs/contact.md, "What is left"; a third contact per corner,
-    tried, did not help). There were 5 (7.8 cm) before
-    a smooth node bore on a second body and a sharp corner head-on
-    (items 9 and 10), 13 (24 cm) before a corner's face bore on the face
-    along it (item 8), and 80 (0.41 m) before contact took up nodes found
-    inside (item 7). An expected failure until a node found inside a
-    piece is taken up wherever it entered."""
-    loose, deepest, h = _loose_nodes(quick_caving[1])
-    assert len(loose) == 0, f"{len(loose)} nodes without contact deeper than {0.01 * h:.3f} m (deepest {deepest:.3f} m)"
+def _stress_released_by_the_undercut(case, until):
+    """The largest compressive principal stress (Pa, as a magnitude) held,
+    one step before each excavation stage up to `until` (s), by the active
+    elements that share a node with the elements the stage removes: the
+    stress the sudden undercut releases (stops do not change a run's bits,
+    so this is the demo's own state)."""
+    model = caving_model(case)
+    sim, _ = fdem.caving._started(model, case, threads=None, progress=False, wall0=0.0)
+    worst = 0.0
+    for at, ids in model.stages:
+        if at > until:
+            break
+        sim.run(until=at - 1.5 * sim.time_step, progress=False)
+        tri, active = sim.triangles(), sim.active()
+        removed = np.zeros(len(tri), bool)
+        removed[sim.elements(ids)] = True
+        removed &= active
+        touched = np.zeros(sim.n_nodes, bool)
+        touched[tri[removed].ravel()] = True
+        beside = active & ~removed & touched[tri].any(axis=1)
+        s = sim.stress()[beside]
+        sigma_3 = 0.5 * (s[:, 0] + s[:, 1]) - np.hypot(0.5 * (s[:, 0] - s[:, 1]), s[:, 3])
+        worst = max(worst, float(-sigma_3.min(initial=0.0)))
+    return worst
 
 
 def test_quick_caving_leaves_few_pieces_inside_another(quick_caving):
-    """Items 9 and 10 of docs/contact.md, "Which facet a node touches": a
-    smooth node bears on a second body it lies deeper in, and a sharp
-    corner pressed head-on bears on the face. The demo's contact-free
-    nodes deeper than 1% of `h` inside another piece went from 5 (the
-    deepest 7.8 cm) to 2 (7.6 cm), and from 1–5 to 0–2 over four
-    numberings of the case (2-core Intel Xeon VM, 2026-11-28). At most 2,
-    none deeper than 3% of `h` (9.3 cm)."""
+    """Items 6, 7, 9 and 10 of docs/contact.md, "Which facet a node
+    touches": contact-free nodes deeper than 1% of the mean element size
+    `h` (3.1 m) inside another piece at the end of the demo (0.8 s). At
+    most 2, none deeper than 3% of `h` (9.3 cm). Measured (2-core Zen 4
+    VM, 2026-11-29): none, and no node in contact either; 0–2 a run over
+    eleven numberings of the case (`benchmarks/caving_numberings.py`), the
+    deepest 23 cm. Before a facet's line extended past a sharp corner bore
+    only just past it (item 6) and item 7 looked past interior sides, the
+    demo left 2 (7.6 cm) and the numberings 0–4 a run; before items 9 and
+    10, 5 (7.8 cm); before item 7, 80 (0.41 m)."""
     loose, deepest, h = _loose_nodes(quick_caving[1])
     assert len(loose) <= 2, f"{len(loose)} nodes without contact deeper than {0.01 * h:.3f} m (deepest {deepest:.3f} m)"
     assert deepest < 0.03 * h, deepest
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="over eleven numberings of the quick case 8 contact-free nodes lie deeper than 1% of h inside "
+    "another piece at 0.8 s, the deepest 23 cm (docs/contact.md, 'What is left')",
+)
+def test_quick_caving_leaves_no_piece_inside_another_whatever_the_numbering(tmp_path):
+    """No node without a contact may lie inside another piece deeper than
+    1% of the mean element size `h`, in the quick case with renumbering
+    off and at 1, 2, …, 10% (the chaos of a falling rock mass turns each
+    numbering into a different run; one run can pass by luck). Contact
+    penetrations under the overburden stay far below 1% of `h`. Measured
+    (2-core Zen 4 VM, 2026-11-29): 0–2 a run, 8 in all, the deepest 23 cm
+    (the demo's own numbering, 5%: none). An expected failure until a node
+    inside a piece is taken up wherever it entered."""
+    found = []
+    for k, renumber in enumerate([None] + [i / 100 for i in range(1, 11)]):
+        case = dataclasses.replace(CavingCase.quick(), renumber=renumber)
+        summary = run_caving(tmp_path / str(k), case, progress=False)
+        loose, deepest, _ = _loose_nodes(summary)
+        found += [(renumber, len(loose), deepest)] if len(loose) else []
+    assert not found, f"(renumbering, loose nodes, deepest m): {found}"
 
 
 def test_quick_caving_keeps_mass_and_closes_its_energy_balance(quick_caving):
@@ -317,17 +345,20 @@ def test_quick_caving_writes_its_results(quick_caving):
     assert {"vx_m_s", "vy_m_s", "ux_m", "uy_m"} <= set(frags[0])
     assert all(math.isfinite(float(r["vy_m_s"])) for r in frags)
     # docs/caving.md, "Fragments faster than free fall": no piece holds more
-    # kinetic energy beyond its fall than a loose piece struck by a wall that
-    # the sudden undercut releases from three times the lithostatic stress
-    # at the undercut level can get, (2 · 3 σ_v / (ρ c_p))² / 2 = 27 J/kg
-    # (measured 15.5 J/kg; 15.5–22.1 over four numberings; 5.0 with a tenth
-    # of the overburden)
-    from fdem import caving_case as cc
-
-    rock = cc.ROCK
+    # kinetic energy beyond its fall than the undercut's release can give.
+    # Removing a stress σ from a face at once sends it off at σ / (ρ c_p),
+    # and a piece it strikes (or a face where the release wave reflects)
+    # leaves at up to twice that: ½ (2 σ / (ρ c_p))², with σ the largest
+    # compressive stress the rock beside any stage holds just before it
+    # (145 MPa at the undercut's corner before the 0.41 s stage: 189 J/kg;
+    # the lithostatic stress there is 18 MPa). Measured 45.6 J/kg, 31.8–49.6
+    # over eleven numberings (2-core Zen 4 VM, 2026-11-29).
+    rock = fdem.caving.ROCK
     m_modulus = rock.E * (1 - rock.nu) / ((1 + rock.nu) * (1 - 2 * rock.nu))
-    sigma_v = cc.TOP_PRESSURE + cc.UNIT_WEIGHT * cc.HEIGHT
-    bound = 0.5 * (2 * 3 * sigma_v / (rock.rho * math.sqrt(m_modulus / rock.rho))) ** 2
+    sigma = _stress_released_by_the_undercut(CavingCase.quick(), until=0.8)
+    # more than the overburden at the model's base: the support carried it
+    assert sigma > fdem.caving.TOP_PRESSURE + fdem.caving.UNIT_WEIGHT * fdem.caving.HEIGHT
+    bound = 0.5 * (2 * sigma / (rock.rho * math.sqrt(m_modulus / rock.rho))) ** 2
     assert 0.0 < summary["fragment_energy_beyond_fall_J_per_kg"] < bound
     assert summary["fragment_speed_max_m_s"] > 0.0
     text = (out / "summary.txt").read_text()

@@ -18,6 +18,38 @@ use crate::{Vec2, CHUNK, NONE, SMOOTH_COS};
 /// that the whole region where the narrow phase accepts a contact is listed.
 pub(crate) const XI_SLACK: f64 = 0.05;
 
+/// Past the end of a facet where its body has a sharp corner (30° or more)
+/// or its surface stops, the facet's line extended bears a node only while
+/// the node lies no further past the end than this share of the facet's
+/// length plus [`SHARP_PAST_DEPTH`] times its penetration
+/// ([`bears_past_sharp_end`]). [`XI_SLACK`] is for a joint's end nodes that
+/// shear has moved a micron past the other block's corner; a node
+/// centimetres past a corner lies over whatever is beyond it, not over this
+/// body. With the whole slack (5%: 20 cm on the caving case's 4 m joints)
+/// a block sliding off a 4 m ledge was held up 25.4 cm past its edge
+/// against the closed form's 12.5 cm (12.7 with the limit), and the
+/// corners at a junction of four blocks held each other's faces extended
+/// while the blocks sheared, so the diagonal blocks' corners ran into each
+/// other "in contact" (docs/contact.md, "Which facet a node touches",
+/// item 6, and "Tightening contact at corners").
+pub(crate) const SHARP_PAST_LENGTH: f64 = 1e-3;
+
+/// See [`SHARP_PAST_LENGTH`]: the share of the node's penetration (m per m)
+/// it may lie past a sharp corner, so that on a short facet the slack is
+/// still of the order of the contact's own depth.
+pub(crate) const SHARP_PAST_DEPTH: f64 = 2.0;
+
+/// Whether a node that projects past an end of a facet (`ξ` outside
+/// `[0, 1]`, within [`XI_SLACK`]) with gap `gap` (m, negative inside) on a
+/// facet of length `len` (m) still bears on it where the body has a sharp
+/// corner there: no further past than [`SHARP_PAST_LENGTH`] `len` +
+/// [`SHARP_PAST_DEPTH`] `|gap|`.
+#[inline]
+pub(super) fn bears_past_sharp_end(xi: f64, gap: f64, len: f64) -> bool {
+    let past = if xi > 1.0 { xi - 1.0 } else { -xi } * len;
+    past <= SHARP_PAST_LENGTH * len - SHARP_PAST_DEPTH * gap
+}
+
 /// Projection of point `s` on the facet `[a, b]`: `(ξ, g_n, n, t, L)`.
 #[inline(always)]
 pub fn project(s: Vec2, a: Vec2, b: Vec2) -> (f64, f64, Vec2, Vec2, f64) {

@@ -12,7 +12,7 @@
 //! (three bodies at a point, a sharp wedge, a corner on two faces) round
 //! one rule each; the code itself is about 470.
 
-use super::projection::{corner_gap, node_normal, projects_inside, XI_SLACK};
+use super::projection::{bears_past_sharp_end, corner_gap, node_normal, projects_inside, XI_SLACK};
 use super::{ContactPartial, ContactState, NarrowInputs};
 use crate::surface::MANY;
 use crate::{Vec2, NONE, SMOOTH_COS};
@@ -82,24 +82,41 @@ fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate
     // this facet is where it lies inside the body: inside the facet's
     // element (the depth rectangle behind a facet reaches past the
     // triangle's sides into whatever lies beside it), nearer this facet's
-    // line than the element's other sides (a node just inside a side lies
-    // in that side, not metres behind this facet), and no deeper than
-    // `FOUND_INSIDE_DEPTH` of the facet's length (item 7 of
-    // docs/contact.md)
+    // line than the element's other sides where those are surface too (a
+    // node just inside a surface side lies in that side, not metres behind
+    // this facet; an interior side has rock on both sides, and near a
+    // vertex the node is nearest one whichever facet it went in through),
+    // and no deeper than `FOUND_INSIDE_DEPTH` of the facet's length (item
+    // 7 of docs/contact.md)
     let inside = || {
         let facet = &inp.surface.facets[f as usize];
         if facet.apex == NONE || -gap > FOUND_INSIDE_DEPTH * c.len {
             return false;
         }
         let s = inp.x[node];
-        let [a, b, c] = [facet.nodes[0], facet.nodes[1], facet.apex].map(|v| inp.x[v as usize]);
+        let [ia, ib, ic] = [facet.nodes[0], facet.nodes[1], facet.apex];
+        let [a, b, c] = [ia, ib, ic].map(|v| inp.x[v as usize]);
         // the distance of the node from the line p → q, positive on its left
         let left = |p: Vec2, q: Vec2| {
             let e = [q[0] - p[0], q[1] - p[1]];
             (e[0] * (s[1] - p[1]) - e[1] * (s[0] - p[0])) / (e[0] * e[0] + e[1] * e[1]).sqrt()
         };
         let (ab, bc, ca) = (left(a, b), left(b, c), left(c, a));
-        ab > 0.0 && ab <= bc && ab <= ca
+        if ab <= 0.0 || bc <= 0.0 || ca <= 0.0 {
+            return false;
+        }
+        // whether the element's side p–q is surface: it is then the facet
+        // that follows this one along the surface (from b) or precedes it
+        // (into a); none or several there (`NONE`, `MANY`) count as surface
+        let surface_side = |link: u32, p: u32, q: u32| match link {
+            NONE | MANY => true,
+            g => {
+                let n = inp.surface.facets[g as usize].nodes;
+                n == [p, q] || n == [q, p]
+            }
+        };
+        let [prev, next] = inp.surface.links[f as usize];
+        (ab <= bc || !surface_side(next, ib, ic)) && (ab <= ca || !surface_side(prev, ic, ia))
     };
     if state.facet != NONE && inp.surface.adjacent(state.facet, f) && no_deeper(state.depth) && {
         // continuing along the surface, not turning a corner of it
@@ -443,6 +460,9 @@ impl<'i, 'a> Search<'i, 'a> {
                 match g {
                     Some(g) if g >= 0.0 => return,
                     Some(g) => c.gap = gap.max(g),
+                    // a sharp corner (or the surface's end): the line
+                    // extended bears only just past it
+                    None if !bears_past_sharp_end(xi, gap, c.len) => return,
                     None => {}
                 }
             }
@@ -713,6 +733,46 @@ mod tests {
         assert_eq!(partials.iter().map(|p| p.stored).sum::<f64>(), 0.0);
     }
 
+    /// Item 6 of docs/contact.md, past a sharp corner: block Q, the unit
+    /// square under y = 0, has a 90° corner at the origin; block P's lower
+    /// left corner N, 0.1 mm into Q's top line, bore on Q's top facet last
+    /// step. Sheared a micron past Q's corner, N still bears there with
+    /// the whole spring `k ℓ × 0.1 mm` (ℓ = 0.5 m, half of N's 1 m bottom
+    /// face; closed form to 1e-9); 2 cm past it (more than
+    /// `SHARP_PAST_LENGTH × 1 m + SHARP_PAST_DEPTH × 0.1 mm` = 1.2 mm) it
+    /// lies over nothing of Q and bears on nothing: with the whole slack
+    /// (5 cm here) it was held by Q's top line extended.
+    #[test]
+    fn a_corner_bears_on_a_facet_past_a_sharp_end_only_just_past_it() {
+        use super::super::projection::{SHARP_PAST_DEPTH, SHARP_PAST_LENGTH};
+        let (k, g) = (1e9, 1e-4);
+        let run = |past: f64| {
+            let q: [Vec2; 4] = [[0.0, -1.0], [1.0, -1.0], [1.0, 0.0], [0.0, 0.0]];
+            let p: [Vec2; 4] = [[-past, -g], [1.0 - past, -g], [1.0 - past, 1.0 - g], [-past, 1.0 - g]];
+            let (x, surface, broad) = blocks(&[&q, &p]);
+            let n = surface.index_of[4] as usize;
+            let top = surface.facets.iter().position(|f| f.nodes == [2, 3]).unwrap() as u32;
+            let (xi, gap, ..) = project(x[4], x[2], x[3]);
+            assert!(xi > 1.0 && xi < 1.0 + XI_SLACK && (gap + g).abs() < 1e-12, "xi {xi}, gap {gap}");
+            assert!(broad.candidates.row(n).contains(&top));
+            let law = InterfaceLaw::new(k, k, 0.0, 0.0, 0.0).unwrap();
+            let (out, _) = with_inputs(&x, &surface, &broad, law, None, |inp| {
+                let mut states = vec![ContactState::default(); surface.nodes.len()];
+                states[n] = ContactState { facet: top, depth: g, ..Default::default() };
+                evaluate_once(inp, states.clone(), states)
+            });
+            (out[0][n], out[1][n], top)
+        };
+        let (a, b, top) = run(1e-6);
+        let held = [a, b].into_iter().find(|c| c.facet == top).expect("a micron past: held");
+        let expected = k * 0.5 * g;
+        assert!((held.normal_force - expected).abs() < 1e-9 * expected, "{held:?}, expected {expected}");
+        let limit = SHARP_PAST_LENGTH * 1.0 + SHARP_PAST_DEPTH * g;
+        assert!(0.02 > limit && 0.02 < XI_SLACK);
+        let (a, b, _) = run(0.02);
+        assert!(a.facet == NONE && b.facet == NONE, "2 cm past: {a:?} {b:?}");
+    }
+
     /// Body A, the triangle (0,0), (1,0), (0.5,1), and body B, a triangle
     /// whose apex `apex_s` points up at A's base from B's base, 0.4 m wide
     /// at y = −0.3 m under it: positions, surface (with apexes), broad phase, the
@@ -863,6 +923,48 @@ mod tests {
         assert!(!held([0.001, 0.005]), "beside A's side");
         assert!(!held([0.004, 0.005]), "nearer A's side than its base");
         assert!(!held([0.5, 0.02]), "deeper than FOUND_INSIDE_DEPTH");
+    }
+
+    /// Item 7 where the element's nearer side is interior: body A is the
+    /// unit square split along its diagonal (0,0)–(1,1) into two elements,
+    /// and B's apex lies 5 mm behind A's base, 8 mm from A's corner, in the
+    /// element under the diagonal: 2.1 mm from the diagonal, nearer than the
+    /// base. The diagonal is rock on both sides, so the apex is held on the
+    /// base (no force where found, the spring offset by the 5 mm; closed
+    /// form to 1e-12). The same apex 2 mm from A's right side instead (a
+    /// surface side of the same element, nearer than the base) is not.
+    #[test]
+    fn a_node_found_inside_by_an_interior_side_is_held_on_the_facet_behind_it() {
+        let held = |s: Vec2| -> (bool, f64) {
+            let sx = s[0];
+            let x: Vec<Vec2> =
+                vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], s, [sx - 0.2, -0.3], [sx + 0.2, -0.3]];
+            // A: base and right side in the element under the diagonal
+            // (third node (1,1) and (0,0)), top and left side in the other
+            // ((0,0) and (1,1)); B: one triangle
+            let facets = [([0, 1], 0), ([1, 2], 0), ([2, 3], 0), ([3, 0], 0), ([4, 5], 0), ([5, 6], 0), ([6, 4], 0)];
+            let apex_nodes = [2u32, 0, 0, 2, 6, 4, 5];
+            let apex: Vec<Vec2> = apex_nodes.iter().map(|&n| x[n as usize]).collect();
+            let mut surface = Surface::new(x.len(), &facets, &x, &apex);
+            surface.set_apexes(|key| apex_nodes[key as usize]);
+            let mut broad = crate::BroadPhase::new(0.5);
+            broad.build(&surface, &x);
+            let b = surface.index_of[4] as usize;
+            let base = surface.facets.iter().position(|f| f.nodes == [0, 1]).unwrap() as u32;
+            let nb = surface.nodes.len();
+            let law = InterfaceLaw::new(1e9, 1e9, 0.0, 0.0, 0.0).unwrap();
+            let (out, _) = with_inputs(&x, &surface, &broad, law, None, |inp| {
+                evaluate_once(inp, vec![ContactState::default(); nb], vec![ContactState::default(); nb])
+            });
+            let c = [out[0][b], out[1][b]].into_iter().find(|c| c.facet == base);
+            (c.is_some(), c.map_or(f64::NAN, |c| c.normal_force))
+        };
+        let (on_base, force) = held([0.008, 0.005]);
+        assert!(on_base, "nearer the interior diagonal than the base: held on the base");
+        assert!(force.abs() < 1e-12, "found inside: no force, {force}");
+        // by the right side, 2 mm away: that side is where it lies, not 5 mm
+        // behind the base
+        assert!(!held([0.998, 0.005]).0, "nearer A's right side than its base");
     }
 
     /// Item 9 of docs/contact.md: a node on a smooth stretch that lies in
