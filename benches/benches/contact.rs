@@ -71,6 +71,7 @@ fn contact(c: &mut Criterion) {
                         narrow::facet_frames(&surface, &x, &mut frames);
                         let inp = NarrowInputs {
                             x: &x,
+                            x_ref: &x,
                             v: &v,
                             mass: &mass,
                             surface: &surface,

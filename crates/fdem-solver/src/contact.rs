@@ -586,10 +586,11 @@ impl ContactModel {
     /// The narrow phase of one contact evaluation at positions `x`,
     /// velocities `v` (parallel; the broad phase must be up to date): every
     /// boundary node's contacts and their forces, not yet assembled.
-    pub fn search(&mut self, surface: &Surface, x: &[Vec2], v: &[Vec2], mass: &[f64], dt: f64) {
+    pub fn search(&mut self, surface: &Surface, x: &[Vec2], x_ref: &[Vec2], v: &[Vec2], mass: &[f64], dt: f64) {
         narrow::facet_frames(surface, x, &mut self.frames);
         let inp = NarrowInputs {
             x,
+            x_ref,
             v,
             mass,
             surface,

@@ -607,7 +607,7 @@ fn search_contact(contact: &mut ContactModel, surface: &Surface, nodes: &Nodes, 
     contact.broad.update(surface, &nodes.x);
     let broad_secs = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
-    contact.search(surface, &nodes.x, &nodes.v, &nodes.mass, dt);
+    contact.search(surface, &nodes.x, &nodes.x0, &nodes.v, &nodes.mass, dt);
     (broad_secs, clock.elapsed().as_secs_f64())
 }
 

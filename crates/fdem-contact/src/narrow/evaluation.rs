@@ -38,6 +38,11 @@ pub struct ContactPartial {
 pub struct NarrowInputs<'a> {
     /// Node positions `x^{n+1}` (m).
     pub x: &'a [Vec2],
+    /// Node positions in the reference configuration (m): two facets whose
+    /// ends lie at the same reference points, in reverse order, are the two
+    /// faces of one crack or joint (item 7 of docs/contact.md). May be
+    /// empty: then no facet has a twin.
+    pub x_ref: &'a [Vec2],
     /// Node velocities `v^{n+½}` (m/s).
     pub v: &'a [Vec2],
     /// Node masses (kg/m).
@@ -333,6 +338,7 @@ pub(super) mod tests {
         let laws = [InterfaceLaw::new(k, k, 0.0, 0.0, 0.0).unwrap()];
         let inp = NarrowInputs {
             x: &x,
+            x_ref: &[],
             v: &v,
             mass: &mass,
             surface: &surface,

@@ -55,7 +55,7 @@ struct Candidate {
 /// start with a finite penetration, and the penalty energy ½α g² would
 /// appear without work (an energy pump at every corner).
 #[inline]
-fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate) -> Option<u8> {
+fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate, own: &[u32]) -> Option<u8> {
     let (f, n, gap) = (c.f, c.n, c.gap);
     if f == state.facet {
         // its spring grows no faster than the node's motion allows
@@ -115,8 +115,20 @@ fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate
                 n == [p, q] || n == [q, p]
             }
         };
+        // the twin of a face of the node (the other face of the same crack
+        // or joint: the same reference points in reverse) is where the node
+        // lies whichever side is nearer: two copies of a node at a crack's
+        // mouth each lie at the other's corner, nearer its other face
+        let twin = || {
+            inp.x_ref.len() > ia.max(ib) as usize
+                && own.iter().any(|&g| {
+                    let [p, q] = inp.surface.facets[g as usize].nodes;
+                    let r = |v: u32| inp.x_ref[v as usize];
+                    r(p) == r(ib) && r(q) == r(ia)
+                })
+        };
         let [prev, next] = inp.surface.links[f as usize];
-        (ab <= bc || !surface_side(next, ib, ic)) && (ab <= ca || !surface_side(prev, ic, ia))
+        ((ab <= bc || !surface_side(next, ib, ic)) && (ab <= ca || !surface_side(prev, ic, ia))) || twin()
     };
     if state.facet != NONE && inp.surface.adjacent(state.facet, f) && no_deeper(state.depth) && {
         // continuing along the surface, not turning a corner of it
@@ -472,7 +484,10 @@ impl<'i, 'a> Search<'i, 'a> {
             if k == 1 && slots == 1 && gap >= self.deeper_than {
                 continue;
             }
-            let Some(r) = rank(inp, self.node, &*states[k], &c) else { continue };
+            // the faces the node bears with in this contact: at a corner its
+            // face, on a smooth stretch both its facets
+            let own = if slots == 1 { inp.surface.node_facets.row(b) } else { &faces[k..=k] };
+            let Some(r) = rank(inp, self.node, &*states[k], &c, own) else { continue };
             // at a corner a facet along the face comes first, whatever its
             // rank (`lies_along`); then the lower rank; equal ranks: the
             // shallower penetration; an exact tie (a node at the vertex two
@@ -536,6 +551,7 @@ mod tests {
         facet_frames(surface, x, &mut frames);
         f(&NarrowInputs {
             x,
+            x_ref: &[],
             v: &v,
             mass: &mass,
             surface,
@@ -632,7 +648,18 @@ mod tests {
                 &'a [InterfaceLaw],
             ),
         ) -> NarrowInputs<'a> {
-            NarrowInputs { x, v, mass, surface, frames, candidates: &broad.candidates, laws, resumed: &[], dt: 1e-4 }
+            NarrowInputs {
+                x,
+                x_ref: &[],
+                v,
+                mass,
+                surface,
+                frames,
+                candidates: &broad.candidates,
+                laws,
+                resumed: &[],
+                dt: 1e-4,
+            }
         }
         let fixed = (&v[..], &mass[..], &surface, &broad, &laws[..]);
         // the memories of one evaluation at the start
@@ -965,6 +992,50 @@ mod tests {
         // by the right side, 2 mm away: that side is where it lies, not 5 mm
         // behind the base
         assert!(!held([0.998, 0.005]).0, "nearer A's right side than its base");
+    }
+
+    /// Item 7 for the twin of a face: body A is the triangle V (0,0), P1
+    /// (1,0), P2 (0,1), its sides at V both surface; body B's corner N lies
+    /// inside A by V, 1.5 mm behind A's base and 1 mm from A's left side,
+    /// its face Q1 → N along A's base and opposing it, its other face
+    /// running down to the left (facing away from A's left side). N is
+    /// nearer A's left side, which its faces do not oppose, so it is found
+    /// in no facet of A; but where B's face Q1 → N and A's base V → P1 are
+    /// the two faces of one crack (N and V, Q1 and P1 at the same reference
+    /// points), N lies behind its twin: held on the base with no force
+    /// (its spring offset by the 1.5 mm; closed form to 1e-12).
+    #[test]
+    fn a_node_found_inside_behind_the_twin_of_its_face_is_held_there() {
+        let s: Vec2 = [0.001, 0.0015];
+        let x: Vec<Vec2> = vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [s[0] + 1.0, s[1]], s, [s[0] - 1.0, s[1] - 1.0]];
+        let facets = [([0, 1], 0), ([1, 2], 0), ([2, 0], 0), ([3, 4], 0), ([4, 5], 0), ([5, 3], 0)];
+        let apex_nodes = [2u32, 0, 1, 5, 3, 4];
+        let apex: Vec<Vec2> = apex_nodes.iter().map(|&n| x[n as usize]).collect();
+        let mut surface = Surface::new(x.len(), &facets, &x, &apex);
+        surface.set_apexes(|key| apex_nodes[key as usize]);
+        let mut broad = crate::BroadPhase::new(0.5);
+        broad.build(&surface, &x);
+        let n = surface.index_of[4] as usize;
+        let base = surface.facets.iter().position(|f| f.nodes == [0, 1]).unwrap() as u32;
+        let nb = surface.nodes.len();
+        let law = InterfaceLaw::new(1e9, 1e9, 0.0, 0.0, 0.0).unwrap();
+        let held = |x_ref: &[Vec2]| -> (bool, f64) {
+            let (out, _) = with_inputs(&x, &surface, &broad, law, None, |inp| {
+                let inp = NarrowInputs { x_ref, ..*inp };
+                evaluate_once(&inp, vec![ContactState::default(); nb], vec![ContactState::default(); nb])
+            });
+            let c = [out[0][n], out[1][n]].into_iter().find(|c| c.facet == base);
+            (c.is_some(), c.map_or(f64::NAN, |c| c.normal_force))
+        };
+        let (a, p1, p2) = ([0.0, 0.0], [1.0, 0.0], [0.0, 1.0]);
+        let twins = [a, p1, p2, p1, a, [-1.0, -1.0]];
+        let (on_base, force) = held(&twins);
+        assert!(on_base, "behind the twin of its face: held on it");
+        assert!(force.abs() < 1e-12, "found inside: no force, {force}");
+        // two faces that were never one: not held
+        let apart = [a, p1, p2, [1.0, 0.5], [0.0, 0.5], [-1.0, -0.5]];
+        assert!(!held(&apart).0, "not a twin, nearer A's left side");
+        assert!(!held(&[]).0, "no reference positions");
     }
 
     /// Item 9 of docs/contact.md: a node on a smooth stretch that lies in
