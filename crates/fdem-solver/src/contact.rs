@@ -583,11 +583,14 @@ impl ContactModel {
         self.size_scratch(new);
     }
 
-    /// The narrow phase of one contact evaluation at positions `x`,
-    /// velocities `v` (parallel; the broad phase must be up to date): every
-    /// boundary node's contacts and their forces, not yet assembled.
+    /// The narrow phase of one contact evaluation at positions `x`
+    /// (reference positions `x_ref`, which tell the two faces of a crack or
+    /// joint), velocities `v` (parallel; the broad phase must be up to
+    /// date): every boundary node's contacts and their forces, not yet
+    /// assembled.
     pub fn search(&mut self, surface: &Surface, x: &[Vec2], x_ref: &[Vec2], v: &[Vec2], mass: &[f64], dt: f64) {
         narrow::facet_frames(surface, x, &mut self.frames);
+        debug_assert_eq!(x_ref.len(), x.len());
         let inp = NarrowInputs {
             x,
             x_ref,

@@ -40,8 +40,8 @@ pub struct NarrowInputs<'a> {
     pub x: &'a [Vec2],
     /// Node positions in the reference configuration (m): two facets whose
     /// ends lie at the same reference points, in reverse order, are the two
-    /// faces of one crack or joint (item 7 of docs/contact.md). May be
-    /// empty: then no facet has a twin.
+    /// faces of one crack or joint (item 7 of docs/contact.md). Every
+    /// node's, or empty: then no facet has a twin.
     pub x_ref: &'a [Vec2],
     /// Node velocities `v^{n+½}` (m/s).
     pub v: &'a [Vec2],

@@ -47,7 +47,9 @@ struct Candidate {
 /// surface) or one parallel to a resumed contact's, 2 a new contact,
 /// [`FOUND_INSIDE`] a facet the node already lies in deeper than entry or
 /// continuity allow (taken up with its spring offset by that depth:
-/// [`ContactState::offset`]). Keeping the same facet stops
+/// [`ContactState::offset`]; `own_faces` are the node's facets it bears
+/// with here, whose twins qualify whatever side is nearer). Keeping the
+/// same facet stops
 /// a node near a corner of the other body from flipping between two
 /// normals. A new contact must have been entered through the facet's line
 /// within this step (its penetration no deeper than its normal approach): a
@@ -55,7 +57,7 @@ struct Candidate {
 /// start with a finite penetration, and the penalty energy ½α g² would
 /// appear without work (an energy pump at every corner).
 #[inline]
-fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate, own: &[u32]) -> Option<u8> {
+fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate, own_faces: &[u32]) -> Option<u8> {
     let (f, n, gap) = (c.f, c.n, c.gap);
     if f == state.facet {
         // its spring grows no faster than the node's motion allows
@@ -120,8 +122,8 @@ fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate
         // lies whichever side is nearer: two copies of a node at a crack's
         // mouth each lie at the other's corner, nearer its other face
         let twin = || {
-            inp.x_ref.len() > ia.max(ib) as usize
-                && own.iter().any(|&g| {
+            !inp.x_ref.is_empty()
+                && own_faces.iter().any(|&g| {
                     let [p, q] = inp.surface.facets[g as usize].nodes;
                     let r = |v: u32| inp.x_ref[v as usize];
                     r(p) == r(ib) && r(q) == r(ia)
@@ -485,9 +487,9 @@ impl<'i, 'a> Search<'i, 'a> {
                 continue;
             }
             // the faces the node bears with in this contact: at a corner its
-            // face, on a smooth stretch both its facets
-            let own = if slots == 1 { inp.surface.node_facets.row(b) } else { &faces[k..=k] };
-            let Some(r) = rank(inp, self.node, &*states[k], &c, own) else { continue };
+            // face, on a smooth stretch all its facets
+            let own_faces = if slots == 1 { inp.surface.node_facets.row(b) } else { &faces[k..=k] };
+            let Some(r) = rank(inp, self.node, &*states[k], &c, own_faces) else { continue };
             // at a corner a facet along the face comes first, whatever its
             // rank (`lies_along`); then the lower rank; equal ranks: the
             // shallower penetration; an exact tie (a node at the vertex two
