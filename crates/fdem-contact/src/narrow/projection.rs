@@ -18,8 +18,9 @@ use crate::{Vec2, CHUNK, NONE, SMOOTH_COS};
 /// that the whole region where the narrow phase accepts a contact is listed.
 pub(crate) const XI_SLACK: f64 = 0.05;
 
-/// Past the end of a facet where its body has a sharp corner (30° or more)
-/// or its surface stops, the facet's line extended bears a node only while
+/// Past the end of a facet where item 5's corner test does not apply (its
+/// body turns there by 30° or more, or inwards, or its surface stops), the
+/// facet's line extended bears a node only while
 /// the node lies no further past the end than this share of the facet's
 /// length plus [`SHARP_PAST_DEPTH`] times its penetration
 /// ([`bears_past_sharp_end`]). [`XI_SLACK`] is for a joint's end nodes that
@@ -42,7 +43,7 @@ pub(crate) const SHARP_PAST_DEPTH: f64 = 2.0;
 /// Whether a node that projects past an end of a facet (`ξ` outside
 /// `[0, 1]`, within [`XI_SLACK`]) with gap `gap` (m, negative inside) on a
 /// facet of length `len` (m) still bears on it where the body has a sharp
-/// corner there: no further past than [`SHARP_PAST_LENGTH`] `len` +
+/// or inward corner there (or ends): no further past than [`SHARP_PAST_LENGTH`] `len` +
 /// [`SHARP_PAST_DEPTH`] `|gap|`.
 #[inline]
 pub(super) fn bears_past_sharp_end(xi: f64, gap: f64, len: f64) -> bool {

@@ -47,9 +47,9 @@ struct Candidate {
 /// surface) or one parallel to a resumed contact's, 2 a new contact,
 /// [`FOUND_INSIDE`] a facet the node already lies in deeper than entry or
 /// continuity allow (taken up with its spring offset by that depth:
-/// [`ContactState::offset`]; `own_faces` are the node's facets it bears
-/// with here, whose twins qualify whatever side is nearer). Keeping the
-/// same facet stops
+/// [`ContactState::offset`]; the twin of the node's bearing `face`, or of
+/// any of its facets on a smooth stretch (`face` [`NONE`]), qualifies
+/// whatever side is nearer). Keeping the same facet stops
 /// a node near a corner of the other body from flipping between two
 /// normals. A new contact must have been entered through the facet's line
 /// within this step (its penetration no deeper than its normal approach): a
@@ -57,7 +57,7 @@ struct Candidate {
 /// start with a finite penetration, and the penalty energy ½α g² would
 /// appear without work (an energy pump at every corner).
 #[inline]
-fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate, own_faces: &[u32]) -> Option<u8> {
+fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate, face: u32) -> Option<u8> {
     let (f, n, gap) = (c.f, c.n, c.gap);
     if f == state.facet {
         // its spring grows no faster than the node's motion allows
@@ -122,8 +122,13 @@ fn rank(inp: &NarrowInputs<'_>, node: usize, state: &ContactState, c: &Candidate
         // lies whichever side is nearer: two copies of a node at a crack's
         // mouth each lie at the other's corner, nearer its other face
         let twin = || {
+            let own = if face == NONE {
+                inp.surface.node_facets.row(inp.surface.index_of[node] as usize)
+            } else {
+                std::slice::from_ref(&face)
+            };
             !inp.x_ref.is_empty()
-                && own_faces.iter().any(|&g| {
+                && own.iter().any(|&g| {
                     let [p, q] = inp.surface.facets[g as usize].nodes;
                     let r = |v: u32| inp.x_ref[v as usize];
                     r(p) == r(ib) && r(q) == r(ia)
@@ -474,8 +479,8 @@ impl<'i, 'a> Search<'i, 'a> {
                 match g {
                     Some(g) if g >= 0.0 => return,
                     Some(g) => c.gap = gap.max(g),
-                    // a sharp corner (or the surface's end): the line
-                    // extended bears only just past it
+                    // a sharp or inward corner (or the surface's end):
+                    // the line extended bears only just past it
                     None if !bears_past_sharp_end(xi, gap, c.len) => return,
                     None => {}
                 }
@@ -486,10 +491,9 @@ impl<'i, 'a> Search<'i, 'a> {
             if k == 1 && slots == 1 && gap >= self.deeper_than {
                 continue;
             }
-            // the faces the node bears with in this contact: at a corner its
-            // face, on a smooth stretch all its facets
-            let own_faces = if slots == 1 { inp.surface.node_facets.row(b) } else { &faces[k..=k] };
-            let Some(r) = rank(inp, self.node, &*states[k], &c, own_faces) else { continue };
+            // the face the node bears with in this contact ([`NONE`] on a
+            // smooth stretch)
+            let Some(r) = rank(inp, self.node, &*states[k], &c, faces[k]) else { continue };
             // at a corner a facet along the face comes first, whatever its
             // rank (`lies_along`); then the lower rank; equal ranks: the
             // shallower penetration; an exact tie (a node at the vertex two
@@ -954,6 +958,34 @@ mod tests {
         assert!(!held([0.5, 0.02]), "deeper than FOUND_INSIDE_DEPTH");
     }
 
+    /// Item 7's take-up in a scene of triangles: bodies from `facets` at
+    /// `x` (each facet's element's third node in `apex_nodes`), no memory,
+    /// reference positions `x_ref`. The normal force (N/m) of mesh node
+    /// `node`'s contact on the facet `[a, b]`, `None` without one.
+    fn found_on(
+        x: &[Vec2],
+        facets: &[([u32; 2], u16)],
+        apex_nodes: &[u32],
+        x_ref: &[Vec2],
+        node: u32,
+        on: [u32; 2],
+    ) -> Option<f64> {
+        let apex: Vec<Vec2> = apex_nodes.iter().map(|&n| x[n as usize]).collect();
+        let mut surface = Surface::new(x.len(), facets, x, &apex);
+        surface.set_apexes(|key| apex_nodes[key as usize]);
+        let mut broad = crate::BroadPhase::new(0.5);
+        broad.build(&surface, x);
+        let b = surface.index_of[node as usize] as usize;
+        let facet = surface.facets.iter().position(|f| f.nodes == on).unwrap() as u32;
+        let nb = surface.nodes.len();
+        let law = InterfaceLaw::new(1e9, 1e9, 0.0, 0.0, 0.0).unwrap();
+        let (out, _) = with_inputs(x, &surface, &broad, law, None, |inp| {
+            let inp = NarrowInputs { x_ref, ..*inp };
+            evaluate_once(&inp, vec![ContactState::default(); nb], vec![ContactState::default(); nb])
+        });
+        [out[0][b], out[1][b]].into_iter().find(|c| c.facet == facet).map(|c| c.normal_force)
+    }
+
     /// Item 7 where the element's nearer side is interior: body A is the
     /// unit square split along its diagonal (0,0)–(1,1) into two elements,
     /// and B's apex lies 5 mm behind A's base, 8 mm from A's corner, in the
@@ -964,36 +996,19 @@ mod tests {
     /// surface side of the same element, nearer than the base) is not.
     #[test]
     fn a_node_found_inside_by_an_interior_side_is_held_on_the_facet_behind_it() {
-        let held = |s: Vec2| -> (bool, f64) {
-            let sx = s[0];
-            let x: Vec<Vec2> =
-                vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], s, [sx - 0.2, -0.3], [sx + 0.2, -0.3]];
+        let held = |s: Vec2| {
+            let x = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], s, [s[0] - 0.2, -0.3], [s[0] + 0.2, -0.3]];
             // A: base and right side in the element under the diagonal
             // (third node (1,1) and (0,0)), top and left side in the other
             // ((0,0) and (1,1)); B: one triangle
             let facets = [([0, 1], 0), ([1, 2], 0), ([2, 3], 0), ([3, 0], 0), ([4, 5], 0), ([5, 6], 0), ([6, 4], 0)];
-            let apex_nodes = [2u32, 0, 0, 2, 6, 4, 5];
-            let apex: Vec<Vec2> = apex_nodes.iter().map(|&n| x[n as usize]).collect();
-            let mut surface = Surface::new(x.len(), &facets, &x, &apex);
-            surface.set_apexes(|key| apex_nodes[key as usize]);
-            let mut broad = crate::BroadPhase::new(0.5);
-            broad.build(&surface, &x);
-            let b = surface.index_of[4] as usize;
-            let base = surface.facets.iter().position(|f| f.nodes == [0, 1]).unwrap() as u32;
-            let nb = surface.nodes.len();
-            let law = InterfaceLaw::new(1e9, 1e9, 0.0, 0.0, 0.0).unwrap();
-            let (out, _) = with_inputs(&x, &surface, &broad, law, None, |inp| {
-                evaluate_once(inp, vec![ContactState::default(); nb], vec![ContactState::default(); nb])
-            });
-            let c = [out[0][b], out[1][b]].into_iter().find(|c| c.facet == base);
-            (c.is_some(), c.map_or(f64::NAN, |c| c.normal_force))
+            found_on(&x, &facets, &[2, 0, 0, 2, 6, 4, 5], &[], 4, [0, 1])
         };
-        let (on_base, force) = held([0.008, 0.005]);
-        assert!(on_base, "nearer the interior diagonal than the base: held on the base");
+        let force = held([0.008, 0.005]).expect("nearer the interior diagonal than the base: held on the base");
         assert!(force.abs() < 1e-12, "found inside: no force, {force}");
         // by the right side, 2 mm away: that side is where it lies, not 5 mm
         // behind the base
-        assert!(!held([0.998, 0.005]).0, "nearer A's right side than its base");
+        assert!(held([0.998, 0.005]).is_none(), "nearer A's right side than its base");
     }
 
     /// Item 7 for the twin of a face: body A is the triangle V (0,0), P1
@@ -1009,35 +1024,17 @@ mod tests {
     #[test]
     fn a_node_found_inside_behind_the_twin_of_its_face_is_held_there() {
         let s: Vec2 = [0.001, 0.0015];
-        let x: Vec<Vec2> = vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [s[0] + 1.0, s[1]], s, [s[0] - 1.0, s[1] - 1.0]];
+        let x = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [s[0] + 1.0, s[1]], s, [s[0] - 1.0, s[1] - 1.0]];
         let facets = [([0, 1], 0), ([1, 2], 0), ([2, 0], 0), ([3, 4], 0), ([4, 5], 0), ([5, 3], 0)];
-        let apex_nodes = [2u32, 0, 1, 5, 3, 4];
-        let apex: Vec<Vec2> = apex_nodes.iter().map(|&n| x[n as usize]).collect();
-        let mut surface = Surface::new(x.len(), &facets, &x, &apex);
-        surface.set_apexes(|key| apex_nodes[key as usize]);
-        let mut broad = crate::BroadPhase::new(0.5);
-        broad.build(&surface, &x);
-        let n = surface.index_of[4] as usize;
-        let base = surface.facets.iter().position(|f| f.nodes == [0, 1]).unwrap() as u32;
-        let nb = surface.nodes.len();
-        let law = InterfaceLaw::new(1e9, 1e9, 0.0, 0.0, 0.0).unwrap();
-        let held = |x_ref: &[Vec2]| -> (bool, f64) {
-            let (out, _) = with_inputs(&x, &surface, &broad, law, None, |inp| {
-                let inp = NarrowInputs { x_ref, ..*inp };
-                evaluate_once(&inp, vec![ContactState::default(); nb], vec![ContactState::default(); nb])
-            });
-            let c = [out[0][n], out[1][n]].into_iter().find(|c| c.facet == base);
-            (c.is_some(), c.map_or(f64::NAN, |c| c.normal_force))
-        };
+        let held = |x_ref: &[Vec2]| found_on(&x, &facets, &[2, 0, 1, 5, 3, 4], x_ref, 4, [0, 1]);
         let (a, p1, p2) = ([0.0, 0.0], [1.0, 0.0], [0.0, 1.0]);
         let twins = [a, p1, p2, p1, a, [-1.0, -1.0]];
-        let (on_base, force) = held(&twins);
-        assert!(on_base, "behind the twin of its face: held on it");
+        let force = held(&twins).expect("behind the twin of its face: held on it");
         assert!(force.abs() < 1e-12, "found inside: no force, {force}");
         // two faces that were never one: not held
         let apart = [a, p1, p2, [1.0, 0.5], [0.0, 0.5], [-1.0, -0.5]];
-        assert!(!held(&apart).0, "not a twin, nearer A's left side");
-        assert!(!held(&[]).0, "no reference positions");
+        assert!(held(&apart).is_none(), "not a twin, nearer A's left side");
+        assert!(held(&[]).is_none(), "no reference positions");
     }
 
     /// Item 9 of docs/contact.md: a node on a smooth stretch that lies in
