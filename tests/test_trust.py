@@ -434,6 +434,39 @@ def fragmenting_memory_growth(tmp_path: Path, elements: float, warm_up: float, u
     return max(readings[:half]), max(readings[half:])
 
 
+def test_a_fragmenting_impact_ends_on_the_same_bits_on_1_2_3_and_16_threads_and_across_a_restart(tmp_path):
+    """Issue 34 (3): the fragmenting impact of benchmarks/fracture_impact.py
+    (5 000 elements at the start; by 0.35 ms after the block meets the
+    platen some 9 000 cracks, 15 000 contacts and 9 000 bonds over about 16
+    chunks of boundary nodes) ends on the same bits on 1, 2, 3 and 16
+    threads (16 on fewer cores still splits the work 16 ways), and so does
+    a run stopped half-way on 3 threads, checkpointed and resumed on 16."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from fracture_impact import GAP, SPEED, build
+    finally:
+        sys.path.pop(0)
+    model = build(5000)
+    start, end = 0.8 * GAP / SPEED, 0.8 * GAP / SPEED + 3.5e-4
+
+    def run(threads: int, until: float, sim: fdem.Simulation | None = None) -> fdem.Simulation:
+        sim = sim or fdem.Simulation(model, threads=threads, stiffness_damping=2e-7)
+        sim.run(until=until, progress=False)
+        return sim
+
+    reference = state(run(1, end))
+    assert reference["clock"][3] > 5000 and len(reference["contacts"]) > 10_000 and len(reference["bonds"]) > 5000
+    assert len(reference["x"]) > 10 * 1024  # many chunks of boundary nodes
+    ends = {threads: state(run(threads, end)) for threads in (2, 3, 16)}
+    half = run(3, start + 1.75e-4)
+    assert 0 < half.insertions < reference["clock"][3]
+    resumed = fdem.Simulation.from_checkpoint(half.save_checkpoint(tmp_path / "half.ckpt"), model, threads=16)
+    ends["3, then 16 after a restart"] = state(run(16, end, resumed))
+    for label, other in ends.items():
+        for key, value in reference.items():
+            assert np.array_equal(other[key], value), f"{key} differs on {label} threads"
+
+
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs /proc")
 def test_resident_memory_of_a_fragmenting_run_grows_under_5_percent_after_warm_up(tmp_path):
     """About 10 000 steps and 25 frames and checkpoints after a warm-up of
