@@ -12,7 +12,7 @@
 //! (three bodies at a point, a sharp wedge, a corner on two faces) round
 //! one rule each; the code itself is about 470.
 
-use super::projection::{bears_past_sharp_end, corner_gap, node_normal, projects_inside, XI_SLACK};
+use super::projection::{bears_past_sharp_end, corner_gap, node_normal, opposing_normal, projects_inside, XI_SLACK};
 use super::{ContactPartial, ContactState, NarrowInputs};
 use crate::surface::MANY;
 use crate::{Vec2, NONE, SMOOTH_COS};
@@ -261,6 +261,11 @@ pub(super) struct Search<'i, 'a> {
     pub(super) best: [Best; 2],
     /// Each contact's bearing normal, computed on first use.
     own: [Option<Vec2>; 2],
+    /// Whether the node is on more than two facets (its body touches
+    /// itself there): its bearing normal is then the face that opposes
+    /// each candidate most squarely ([`opposing_normal`]), worked out on
+    /// first use.
+    pinch: Option<bool>,
     /// Per contact, a facet it may take neither nor a neighbour of
     /// ([`NONE`]: none): at a smooth node each contact keeps away from the
     /// other's facet, so that the two bear on different bodies.
@@ -287,6 +292,7 @@ impl<'i, 'a> Search<'i, 'a> {
             slots,
             best: [None; 2],
             own: [None; 2],
+            pinch: None,
             apart: [NONE; 2],
             deeper_than: f64::INFINITY,
         }
@@ -455,15 +461,21 @@ impl<'i, 'a> Search<'i, 'a> {
             if apart != NONE && (f == apart || inp.surface.adjacent(f, apart)) {
                 continue;
             }
-            // the face that bears: the node's mean normal, or at a corner
-            // the contact's own facet
-            let m = *self.own[k].get_or_insert_with(|| {
-                if slots == 1 {
-                    node_normal(inp.surface, inp.frames, b)
-                } else {
-                    inp.frames[faces[k] as usize].normal()
-                }
-            });
+            // the face that bears: the node's mean normal, at a corner the
+            // contact's own facet, where the body touches itself the face
+            // that opposes this facet most squarely
+            let pinch = slots == 1 && *self.pinch.get_or_insert_with(|| inp.surface.node_facets.row(b).len() > 2);
+            let m = if pinch {
+                opposing_normal(inp.surface, inp.frames, b, c.n)
+            } else {
+                *self.own[k].get_or_insert_with(|| {
+                    if slots == 1 {
+                        node_normal(inp.surface, inp.frames, b)
+                    } else {
+                        inp.frames[faces[k] as usize].normal()
+                    }
+                })
+            };
             let facing = m[0] * c.n[0] + m[1] * c.n[1];
             // past an end of the facet (within the slack) only a face that
             // lies along it slides on: a face at an angle (the crack face at
@@ -1086,6 +1098,59 @@ mod tests {
         let (first, second, top_a, _) = run(-0.001);
         assert_eq!(first.facet, top_a);
         assert_eq!(second.facet, NONE, "{second:?}");
+    }
+
+    /// Item 11 of docs/contact.md: a node where its body touches itself
+    /// (two triangles of one piece meeting at it, four facets) held on a
+    /// crack face a hair past the face's end, at a slightly concave vertex
+    /// of the other piece, as traced in the quick caving case. The mean of
+    /// its four facets' normals is 39° off the face's, beyond the 30° past
+    /// an end allows, and the next face is deeper than the contact was, so
+    /// it lost the contact and sank. Its west face opposes the face head-on
+    /// and now bears: held on the face at its depth, `α = k ℓ` with `ℓ` at
+    /// least that face's half.
+    #[test]
+    fn a_node_where_its_body_touches_itself_bears_with_its_face_that_opposes() {
+        let (k, depth, past) = (1e9, 1.2e-4, 1e-4);
+        // the other piece, west of x = 0: the face A up to the vertex at
+        // the origin, then B turning 1.7° to the right (a concave vertex)
+        let west: [Vec2; 5] = [[-2.0, -1.0], [0.0, -1.0], [0.0, 0.0], [0.03, 1.0], [-2.0, 1.0]];
+        // the pinched node P (index 5) 0.12 mm inside, 0.1 mm past A's end;
+        // triangles (P, 6, 7) and (P, 8, 9), 6 and 9 copies at one point
+        let p: Vec2 = [-depth, past];
+        let x: Vec<Vec2> =
+            west.iter().copied().chain([p, [1.0, 0.4], [-depth, 1.0], [1.0, -0.2], [1.0, 0.4]]).collect();
+        let mut facets: Vec<([u32; 2], u16)> = (0..5).map(|i| ([i, (i + 1) % 5], 0)).collect();
+        facets.extend([([5, 6], 0), ([6, 7], 0), ([7, 5], 0), ([5, 8], 0), ([8, 9], 0), ([9, 5], 0)]);
+        let apex = vec![[-1.0, 0.0]; facets.len()];
+        let surface = Surface::new(x.len(), &facets, &x, &apex);
+        let mut broad = crate::BroadPhase::new(0.5);
+        broad.build(&surface, &x);
+        let b = surface.index_of[5] as usize;
+        assert_eq!((surface.node_facets.row(b).len(), surface.faces[b]), (4, [NONE; 2]));
+        let facet = |nodes: [u32; 2]| surface.facets.iter().position(|f| f.nodes == nodes).unwrap() as u32;
+        let (face_a, face_b) = (facet([1, 2]), facet([2, 3]));
+        let law = InterfaceLaw::new(k, k, 0.0, 0.0, 0.0).unwrap();
+        let out = with_inputs(&x, &surface, &broad, law, None, |inp| {
+            // the case: past A's end the mean normal is more than 30° off,
+            // and B lies deeper than the contact on A was
+            let n_a = inp.frames[face_a as usize].normal();
+            let mean = node_normal(&surface, inp.frames, b);
+            assert!(mean[0] * n_a[0] + mean[1] * n_a[1] > -SMOOTH_COS, "{mean:?}");
+            let (xi, gap) = inp.frames[face_a as usize].project(p, x[1]);
+            assert!(xi > 1.0 && (gap + depth).abs() < 1e-15, "{xi} {gap}");
+            assert!(inp.frames[face_b as usize].project(p, x[2]).1 < -depth * (1.0 + 10.0 * DEPTH_SLACK));
+            let nb = surface.nodes.len();
+            let mut states = vec![ContactState::default(); nb];
+            states[b] = ContactState { facet: face_a, depth, ..Default::default() };
+            evaluate_once(inp, states, vec![ContactState::default(); nb]).0
+        });
+        let held = out[0][b];
+        assert_eq!(held.facet, face_a, "{held:?}");
+        assert!((held.gap + depth).abs() < 1e-15, "{held:?}");
+        let ell = held.normal_force / (k * depth);
+        let all: f64 = surface.node_facets.row(b).iter().map(|&f| 0.5 * surface.facets[f as usize].length).sum();
+        assert!((0.5..=all).contains(&ell), "tributary {ell}, at most {all}");
     }
 
     /// Item 10 of docs/contact.md: the tip of a 20° wedge pressed head-on
