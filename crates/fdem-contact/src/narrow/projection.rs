@@ -147,28 +147,23 @@ pub(super) fn node_normal(surface: &Surface, frames: &[FacetFrame], b: usize) ->
     }
 }
 
-/// The outward normal (unit) of the facet of boundary node `b` that
-/// opposes `n` most squarely (the least `m·n`; the first such in the
-/// node's facet order on a tie): at a node where its body touches itself
-/// (more than two facets, two wedges of one body meeting at the node) the
-/// face that lies along a facet of normal `n`, if one does. The mean of
-/// its facets' normals points between the wedges, at no face: 42° off
-/// the face that held a pinched node of the quick caving case on a crack
+/// How squarely the face of boundary node `b` that opposes `n` most
+/// squarely does so: the least `m·n` over the outward normals `m` of the
+/// node's facets. At a node where its body touches itself (more than two
+/// facets, two wedges of one body meeting at the node) it tells whether a
+/// face of its own lies along a facet of normal `n`. The mean of its
+/// facets' normals points between the wedges, at no face: 42° off the
+/// face that held a pinched node of the quick caving case on a crack
 /// face, so that the node, a hair past the facet's end, lost the contact
 /// (past an end only a face within 30° of head-on slides on) and sank 4.5
 /// cm into the other piece by 0.8 s (docs/contact.md, "Which facet a node
 /// touches", item 11).
 #[inline]
-pub(super) fn opposing_normal(surface: &Surface, frames: &[FacetFrame], b: usize, n: Vec2) -> Vec2 {
-    let mut best = ([0.0; 2], f64::INFINITY);
-    for &k in surface.node_facets.row(b) {
+pub(super) fn most_opposed(surface: &Surface, frames: &[FacetFrame], b: usize, n: Vec2) -> f64 {
+    surface.node_facets.row(b).iter().fold(f64::INFINITY, |least, &k| {
         let m = frames[k as usize].normal();
-        let dot = m[0] * n[0] + m[1] * n[1];
-        if dot < best.1 {
-            best = (m, dot);
-        }
-    }
-    best.0
+        least.min(m[0] * n[0] + m[1] * n[1])
+    })
 }
 
 /// At a shallow convex corner of the surface (a turn of less than 30°), the

@@ -12,7 +12,7 @@
 //! (three bodies at a point, a sharp wedge, a corner on two faces) round
 //! one rule each; the code itself is about 470.
 
-use super::projection::{bears_past_sharp_end, corner_gap, node_normal, opposing_normal, projects_inside, XI_SLACK};
+use super::projection::{bears_past_sharp_end, corner_gap, most_opposed, node_normal, projects_inside, XI_SLACK};
 use super::{ContactPartial, ContactState, NarrowInputs};
 use crate::surface::MANY;
 use crate::{Vec2, NONE, SMOOTH_COS};
@@ -263,7 +263,7 @@ pub(super) struct Search<'i, 'a> {
     own: [Option<Vec2>; 2],
     /// Whether the node is on more than two facets (its body touches
     /// itself there): past a facet's end any face of its own that lies
-    /// along the facet then slides on ([`opposing_normal`]), worked out on
+    /// along the facet then slides on ([`most_opposed`]), worked out on
     /// first use.
     pinch: Option<bool>,
     /// Per contact, a facet it may take neither nor a neighbour of
@@ -484,10 +484,9 @@ impl<'i, 'a> Search<'i, 'a> {
                 facing <= -FACING_COS || (slots == 2 && on_facet && *sharp.get_or_insert_with(sharp_face) == Some(k));
             let along_past = on_facet
                 || facing <= -SMOOTH_COS
-                || (slots == 1 && *self.pinch.get_or_insert_with(|| inp.surface.node_facets.row(b).len() > 2) && {
-                    let o = opposing_normal(inp.surface, inp.frames, b, c.n);
-                    o[0] * c.n[0] + o[1] * c.n[1] <= -SMOOTH_COS
-                });
+                || (slots == 1
+                    && *self.pinch.get_or_insert_with(|| inp.surface.node_facets.row(b).len() > 2)
+                    && most_opposed(inp.surface, inp.frames, b, c.n) <= -SMOOTH_COS);
             if !bears || !along_past {
                 continue;
             }
